@@ -1,0 +1,34 @@
+// core: compile-time bounds. Every array in firmware_lib is sized from one of these; algorithms are
+// templates over a Bounds type. The defaults are a controller-class configuration (Cortex-M4F, about
+// 128 KiB RAM); the host instantiates larger ones for benchmarks.
+#pragma once
+
+namespace geojcbb {
+
+/// @tparam MaxObservations  observations in one scan (M)
+/// @tparam MaxCandidates    map features offered to one association call (n, after the local region)
+/// @tparam MaxGroups        observation groups (clustering, issue 3)
+/// @tparam MaxJcbbNodes     JCBB interpretation-tree nodes per scan (the worst-case cost of a scan)
+/// @tparam MaxLandmarks     landmarks in the EKF map
+template <int MaxObservations, int MaxCandidates, int MaxGroups, int MaxJcbbNodes, int MaxLandmarks>
+struct Bounds {
+  static constexpr int kMaxObservations = MaxObservations;
+  static constexpr int kMaxCandidates = MaxCandidates;
+  static constexpr int kMaxGroups = MaxGroups;
+  static constexpr int kMaxJcbbNodes = MaxJcbbNodes;
+  static constexpr int kMaxLandmarks = MaxLandmarks;
+  /// Rows of a joint innovation: two per pairing, at most one pairing per observation.
+  static constexpr int kMaxJointRows = 2 * MaxObservations;
+
+  static_assert(MaxObservations >= 1 && MaxObservations <= 127, "observation index must fit int8");
+  static_assert(MaxCandidates >= 1 && MaxCandidates <= 32767, "candidate index must fit int16");
+  static_assert(MaxCandidates <= MaxLandmarks, "candidates are a subset of the map");
+  static_assert(MaxGroups >= 1 && MaxGroups <= MaxObservations, "a group holds at least one observation");
+  static_assert(MaxJcbbNodes >= 1, "JCBB needs a node budget");
+};
+
+/// Controller-class default: 24 observations per scan, 32 candidates in the local region, 5 groups,
+/// 4000 JCBB nodes per scan, 64 landmarks in the map.
+using DefaultBounds = Bounds<24, 32, 5, 4000, 64>;
+
+}  // namespace geojcbb

@@ -1,0 +1,64 @@
+// core: small math shared by every stage: fixed-size Eigen aliases, angle wrapping into (-pi, pi],
+// finiteness and covariance checks. No allocation; every loop is bounded by a matrix size.
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+namespace geojcbb {
+
+template <typename T> using Vec2 = Eigen::Matrix<T, 2, 1>;
+template <typename T> using Vec3 = Eigen::Matrix<T, 3, 1>;
+template <typename T> using Mat2 = Eigen::Matrix<T, 2, 2>;
+template <typename T> using Mat3 = Eigen::Matrix<T, 3, 3>;
+template <typename T> using Mat23 = Eigen::Matrix<T, 2, 3>;
+template <typename T> using Mat32 = Eigen::Matrix<T, 3, 2>;
+
+template <typename T> constexpr T kPi = T(3.14159265358979323846264338327950288L);
+template <typename T> constexpr T kTwoPi = T(6.28318530717958647692528676655900577L);
+
+/// Wraps an angle into (-pi, pi]. Exact for inputs already in range; uses std::remainder (no loop).
+template <typename T>
+T wrap_angle(T a) {
+  T r = std::remainder(a, kTwoPi<T>);  // in [-pi, pi]
+  if (r <= -kPi<T>) r += kTwoPi<T>;
+  return r;
+}
+
+template <typename Derived>
+bool all_finite(const Eigen::MatrixBase<Derived>& m) {
+  return m.allFinite();
+}
+
+/// Relative tolerance for "symmetric" and "positive" checks on covariances computed in Scalar T:
+/// products like H P H^T carry rounding of a few hundred ulps.
+template <typename T> constexpr T kCovarianceTolerance = T(1024) * std::numeric_limits<T>::epsilon();
+
+/// True when |a - b| is within rounding of their magnitudes.
+template <typename T>
+bool nearly_equal(T a, T b) {
+  return std::abs(a - b) <= kCovarianceTolerance<T> * (std::abs(a) + std::abs(b)) +
+                                std::numeric_limits<T>::min();
+}
+
+/// A 2x2 covariance is acceptable as a measurement noise R when finite, symmetric and positive
+/// definite (both leading minors strictly positive).
+template <typename T>
+bool is_spd(const Mat2<T>& m) {
+  return m.allFinite() && nearly_equal(m(0, 1), m(1, 0)) && m(0, 0) > T(0) &&
+         m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0) > T(0);
+}
+
+/// A 2x2 block of a predicted-measurement covariance C may be singular (a perfectly known feature)
+/// but never indefinite.
+template <typename T>
+bool is_psd(const Mat2<T>& m) {
+  const T det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
+  const T scale = m(0, 0) * m(1, 1);
+  return m.allFinite() && nearly_equal(m(0, 1), m(1, 0)) && m(0, 0) >= T(0) && m(1, 1) >= T(0) &&
+         det >= -kCovarianceTolerance<T> * scale;
+}
+
+}  // namespace geojcbb

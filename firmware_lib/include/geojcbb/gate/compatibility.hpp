@@ -1,0 +1,76 @@
+// gate: the local region (2019 paper, eq. 5) and the individual compatibility test of every
+// (observation i, candidate j) pair:
+//   nu_ij = z_i - h_j (bearing wrapped),  S_ij = C_jj + R_i,  d2_ij = nu_ij^T S_ij^-1 nu_ij <= chi2(a, 2)
+// Output: per observation, its compatible candidates sorted by d2 (nearest first).
+// Bounds: MaxObservations x MaxCandidates pairs; insertion sort of at most MaxCandidates entries.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+#include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/association_types.hpp"
+
+namespace geojcbb {
+
+/// Innovation z - h with the bearing wrapped into (-pi, pi].
+template <typename T>
+Vec2<T> innovation(const Vec2<T>& z, const Vec2<T>& h) {
+  return Vec2<T>(z.x() - h.x(), wrap_angle(z.y() - h.y()));
+}
+
+/// d2 = nu^T S^-1 nu for a 2x2 symmetric positive definite S (closed form).
+template <typename T>
+T mahalanobis2(const Vec2<T>& nu, const Mat2<T>& S) {
+  const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+  return (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() +
+          S(0, 0) * nu.y() * nu.y()) /
+         det;
+}
+
+template <typename T, class B>
+struct CompatibilityTable {
+  std::array<std::int16_t, B::kMaxObservations> count;  ///< compatible candidates per observation
+  /// cand[i][k]: k-th nearest compatible candidate of observation i (k < count[i]).
+  std::array<std::array<std::int16_t, B::kMaxCandidates>, B::kMaxObservations> cand;
+  std::array<std::array<T, B::kMaxCandidates>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
+  std::array<T, B::kMaxObservations> nearest_d2;  ///< min d2 over the region, compatible or not
+  std::array<bool, B::kMaxCandidates> in_region;
+};
+
+/// Builds the table. Inputs must already be validated (see validate.hpp).
+template <typename T, class B>
+void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                         const AssociationConfig<T, B>& cfg, CompatibilityTable<T, B>& table,
+                         AssociationDiagnostics& diag) {
+  diag.candidates_in_region = 0;
+  diag.compatible_pairs = 0;
+  for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+    table.in_region[j] = !cfg.local_region || pred.h[j].x() < cfg.local_radius_m;
+    if (table.in_region[j]) ++diag.candidates_in_region;
+  }
+  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+    int n = 0;
+    T nearest = std::numeric_limits<T>::infinity();
+    for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+      if (!table.in_region[j]) continue;
+      const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
+      const T d2 = mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
+      if (d2 < nearest) nearest = d2;
+      if (!(d2 <= cfg.gate.individual)) continue;
+      int k = n++;  // insertion sort by d2, ties by candidate index (stable)
+      for (; k > 0 && table.d2[i][k - 1] > d2; --k) {  // <= kMaxCandidates
+        table.d2[i][k] = table.d2[i][k - 1];
+        table.cand[i][k] = table.cand[i][k - 1];
+      }
+      table.d2[i][k] = d2;
+      table.cand[i][k] = static_cast<std::int16_t>(j);
+    }
+    table.count[i] = static_cast<std::int16_t>(n);
+    table.nearest_d2[i] = nearest;
+    diag.compatible_pairs = static_cast<std::uint16_t>(diag.compatible_pairs + n);
+  }
+}
+
+}  // namespace geojcbb

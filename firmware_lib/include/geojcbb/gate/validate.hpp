@@ -1,0 +1,59 @@
+// gate: validation of one association call's inputs and options, before any state is touched.
+// Checks: counts within capacity, C sized 2n x 2n, every value finite, ranges >= 0, |bearing| <= pi,
+// R_i symmetric positive definite, C symmetric with positive semidefinite 2x2 diagonal blocks.
+// (C's off-diagonal definiteness is checked where it is used: a non-positive Cholesky pivot in the
+// joint test.) Bounds: O(n^2) over C, O(m) over observations.
+#pragma once
+
+#include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/association_types.hpp"
+
+namespace geojcbb {
+
+/// @return kOk; kCapacityExceeded for a count over capacity; kInvalidInput for a negative count, a
+///         mis-sized C, a negative range, |bearing| > pi, or bad options; kNonFinite for NaN/Inf;
+///         kNotSymmetric / kNotPositiveDefinite for a bad R_i or C.
+template <typename T, class B>
+[[nodiscard]] Status validate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                              const AssociationConfig<T, B>& cfg) {
+  if (obs.count > B::kMaxObservations || pred.count > B::kMaxCandidates) {
+    return Status::kCapacityExceeded;
+  }
+  if (obs.count < 0 || pred.count < 0) return Status::kInvalidInput;
+  if (pred.C.rows() != 2 * pred.count || pred.C.cols() != 2 * pred.count) {
+    return Status::kInvalidInput;
+  }
+  if (cfg.node_budget < 1 || cfg.node_budget > B::kMaxJcbbNodes || !cfg.gate.valid()) {
+    return Status::kInvalidInput;
+  }
+  if (cfg.local_region && !(std::isfinite(cfg.local_radius_m) && cfg.local_radius_m > T(0))) {
+    return Status::kInvalidInput;
+  }
+  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+    if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
+    if (obs.z[i].x() < T(0) || std::abs(obs.z[i].y()) > kPi<T>) return Status::kInvalidInput;
+    if (!nearly_equal(obs.R[i](0, 1), obs.R[i](1, 0))) return Status::kNotSymmetric;
+    if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
+  }
+  const int rows = 2 * pred.count;
+  for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+    if (!pred.h[j].allFinite()) return Status::kNonFinite;
+    if (pred.id[j] < 0) return Status::kInvalidInput;
+  }
+  for (int c = 0; c < rows; ++c) {  // <= 2 kMaxCandidates
+    for (int r = c; r < rows; ++r) {  // <= 2 kMaxCandidates
+      const T a = pred.C(r, c);
+      const T b = pred.C(c, r);
+      if (!std::isfinite(a) || !std::isfinite(b)) return Status::kNonFinite;
+      if (!nearly_equal(a, b)) return Status::kNotSymmetric;
+    }
+  }
+  for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+    if (!is_psd(Mat2<T>(pred.C.template block<2, 2>(2 * j, 2 * j)))) {
+      return Status::kNotPositiveDefinite;
+    }
+  }
+  return Status::kOk;
+}
+
+}  // namespace geojcbb

@@ -1,0 +1,177 @@
+// jcbb: joint compatibility branch and bound (Neira & Tardos 2001), iterative on an explicit stack.
+// Input: the compatibility table (gate/compatibility.hpp). Output: per observation a candidate or -1,
+// the number of pairings and the joint d2 of the best hypothesis found.
+// - The joint test runs at every node (not only at leaves), incrementally (joint_compatibility.hpp).
+// - Bound: pairings so far + remaining observations that still have a free compatible candidate.
+// - Options: mutual exclusion; optimal criterion (2019 paper, eq. 14: among the most pairings, the
+//   smallest joint d2, pruned with the monotone d2); fewest-candidates-first ordering; node budget
+//   (anytime: the best hypothesis so far and a flag).
+// Bounds: stack depth <= MaxObservations; nodes <= node_budget <= MaxJcbbNodes; each node O(p^2).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/association_types.hpp"
+#include "geojcbb/gate/compatibility.hpp"
+#include "geojcbb/jcbb/joint_compatibility.hpp"
+
+namespace geojcbb {
+
+template <typename T, class B>
+struct SearchOutcome {
+  std::array<std::int16_t, B::kMaxObservations> best;  ///< per observation: candidate or -1
+  int pairings = 0;
+  T joint_d2 = T(0);
+  std::uint32_t nodes = 0;
+  bool budget_hit = false;
+};
+
+template <typename T, class B>
+struct JcbbWorkspace {
+  IncrementalJoint<T, B::kMaxObservations> joint;
+  std::array<std::int8_t, B::kMaxObservations> order;     ///< level -> observation
+  std::array<std::int16_t, B::kMaxObservations> next;     ///< level -> next candidate position
+  std::array<bool, B::kMaxObservations> paired;           ///< level -> holds a pairing
+  std::array<std::int16_t, B::kMaxObservations> current;  ///< observation -> candidate or -1
+  std::array<std::uint8_t, B::kMaxCandidates> used;       ///< candidate -> pairings holding it
+};
+
+/// The levels of the interpretation tree: observations with at least one compatible candidate, in
+/// observation order or (stably) by fewest candidates first. Returns the number of levels.
+/// Bound: insertion sort of <= MaxObservations entries.
+template <typename T, class B>
+int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first,
+                 std::array<std::int8_t, B::kMaxObservations>& order) {
+  int levels = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (table.count[i] == 0) continue;
+    int k = levels++;
+    for (; fewest_first && k > 0 && table.count[order[k - 1]] > table.count[i]; --k) {
+      order[k] = order[k - 1];
+    }
+    order[k] = static_cast<std::int8_t>(i);
+  }
+  return levels;
+}
+
+/// Runs JCBB. Inputs must be validated and the table built for the same inputs and config.
+/// @return kOk (also when the node budget ran out: see out.budget_hit); kNotPositiveDefinite when a
+///         joint covariance has a non-positive pivot (C not PSD). On error `out` is unspecified.
+template <typename T, class B>
+[[nodiscard]] Status jcbb_search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                 const AssociationConfig<T, B>& cfg,
+                                 const CompatibilityTable<T, B>& table, JcbbWorkspace<T, B>& ws,
+                                 SearchOutcome<T, B>& out) {
+  const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, ws.order);
+  const bool exclusion = cfg.mutual_exclusion;
+  const bool optimal = cfg.optimal_criterion;
+  const auto budget = static_cast<std::uint32_t>(cfg.node_budget);
+  ws.joint.clear();
+  for (int j = 0; j < pred.count; ++j) ws.used[j] = 0;  // <= kMaxCandidates
+  for (int i = 0; i < obs.count; ++i) {                 // <= kMaxObservations
+    ws.current[i] = -1;
+    out.best[i] = -1;
+  }
+  out.pairings = 0;
+  out.joint_d2 = T(0);
+  out.nodes = 0;
+  out.budget_hit = false;
+
+  // Levels after k whose observation still has a compatible candidate free to take.
+  auto remaining_after = [&](int k) {
+    if (!exclusion) return levels - 1 - k;
+    int n = 0;
+    for (int l = k + 1; l < levels; ++l) {  // <= kMaxObservations
+      const int i = ws.order[l];
+      for (int q = 0; q < table.count[i]; ++q) {  // <= kMaxCandidates
+        if (ws.used[table.cand[i][q]] == 0) {
+          ++n;
+          break;
+        }
+      }
+    }
+    return n;
+  };
+  // Can a subtree reaching at most `bound` pairings, with joint d2 at least `d2`, beat the best?
+  auto can_improve = [&](int bound, T d2) {
+    return bound > out.pairings || (optimal && bound == out.pairings && d2 < out.joint_d2);
+  };
+
+  int k = 0;
+  if (levels > 0) {
+    ws.next[0] = 0;
+    ws.paired[0] = false;
+  }
+  // Each iteration expands a node (<= budget), skips one candidate of the current level
+  // (<= kMaxCandidates + 1 per expansion) or backtracks one level (<= one per expansion): at most
+  // (budget + 1) * (kMaxCandidates + 3) iterations.
+  for (;;) {
+    bool backtrack = true;
+    if (k == levels) {
+      const int p = ws.joint.pairs();
+      const T d2 = ws.joint.d2();
+      if (p > out.pairings || (optimal && p == out.pairings && d2 < out.joint_d2)) {
+        out.pairings = p;
+        out.joint_d2 = d2;
+        for (int i = 0; i < obs.count; ++i) out.best[i] = ws.current[i];  // <= kMaxObservations
+      }
+    } else {
+      const int i = ws.order[k];
+      const int nc = table.count[i];
+      std::int16_t& next = ws.next[k];
+      if (next < nc) {
+        backtrack = false;
+        const int c = table.cand[i][next++];
+        if (exclusion && ws.used[c] != 0) continue;
+        const int p1 = ws.joint.pairs() + 1;
+        const int bound = p1 + remaining_after(k);
+        if (!can_improve(bound, ws.joint.d2())) continue;  // adding a pairing never lowers d2
+        if (out.nodes >= budget) {
+          out.budget_hit = true;
+          break;
+        }
+        ++out.nodes;
+        T d2 = T(0);
+        const Status s = ws.joint.try_push(pred.C, c, obs.R[i], innovation(obs.z[i], pred.h[c]), d2);
+        if (s != Status::kOk) return s;
+        if (!(d2 <= cfg.gate.joint[p1]) || !can_improve(bound, d2)) continue;
+        ws.joint.commit();
+        ++ws.used[c];
+        ws.current[i] = static_cast<std::int16_t>(c);
+        ws.paired[k] = true;
+      } else if (next == nc) {
+        backtrack = false;
+        ++next;  // the star branch: observation i left unpaired
+        if (!can_improve(ws.joint.pairs() + remaining_after(k), ws.joint.d2())) continue;
+        if (out.nodes >= budget) {
+          out.budget_hit = true;
+          break;
+        }
+        ++out.nodes;
+        ws.paired[k] = false;
+      }
+      if (!backtrack) {
+        ++k;
+        if (k < levels) {
+          ws.next[k] = 0;
+          ws.paired[k] = false;
+        }
+        continue;
+      }
+    }
+    if (k == 0) break;
+    --k;
+    if (ws.paired[k]) {
+      const int i = ws.order[k];
+      ws.joint.pop();
+      --ws.used[ws.current[i]];
+      ws.current[i] = -1;
+      ws.paired[k] = false;
+    }
+  }
+  return Status::kOk;
+}
+
+}  // namespace geojcbb

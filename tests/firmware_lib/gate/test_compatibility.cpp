@@ -1,0 +1,91 @@
+// Individual gate and local region: the gate boundary, bearing wrap across +-pi, eq. 5's strict <.
+#include <doctest/doctest.h>
+
+#include "support/helpers.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::test;
+
+namespace {
+// One observation, n candidates with independent unit-ish covariances.
+template <typename T, class B>
+void one_obs(Problem<T, B>& p, Vec2<T> z, std::initializer_list<Vec2<T>> hs) {
+  p.obs.count = 1;
+  p.obs.z[0] = z;
+  p.obs.R[0] = Mat2<T>::Identity() * T(0.01);
+  p.pred.count = static_cast<int>(hs.size());
+  p.pred.C.setZero(2 * p.pred.count, 2 * p.pred.count);
+  int j = 0;
+  for (const auto& h : hs) {
+    p.pred.id[j] = 100 + j;
+    p.pred.h[j] = h;
+    p.pred.C.template block<2, 2>(2 * j, 2 * j) = Mat2<T>::Identity() * T(0.01);
+    ++j;
+  }
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("a landmark at +179.5 deg observed at -179.5 deg is compatible", T, float, double) {
+  auto p = make_problem<T, DefaultBounds>();
+  const T deg = kPi<T> / T(180);
+  one_obs<T, DefaultBounds>(*p, Vec2<T>(T(5), T(-179.5) * deg), {Vec2<T>(T(5), T(179.5) * deg)});
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, false, false);
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 100);
+  // innovation 1 deg, S = 0.02 rad^2 on the bearing: d2 = (pi/180)^2 / 0.02
+  CHECK(p->out.d2[0] == doctest::Approx(deg * deg / T(0.02)).epsilon(1e-3));
+}
+
+TEST_CASE_TEMPLATE("the individual gate accepts d2 at the threshold and rejects just above", T, float,
+                   double) {
+  auto p = make_problem<T, DefaultBounds>();
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kIcnn, false, false);
+  // Range innovation e with S_rr = 0.02: d2 = e^2 / 0.02. Put d2 at the threshold and 0.1 % over.
+  const T e_at = std::sqrt(cfg.gate.individual * T(0.02));
+  one_obs<T, DefaultBounds>(*p, Vec2<T>(T(5) + e_at * T(0.9995), T(0)), {Vec2<T>(T(5), T(0))});
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 100);
+  one_obs<T, DefaultBounds>(*p, Vec2<T>(T(5) + e_at * T(1.001), T(0)), {Vec2<T>(T(5), T(0))});
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == kNewFeature);
+  CHECK(p->out.d2[0] > cfg.gate.individual);
+}
+
+TEST_CASE_TEMPLATE("local region keeps candidates with predicted range < r + d only (eq. 5)", T, float,
+                   double) {
+  auto p = make_problem<T, DefaultBounds>();
+  one_obs<T, DefaultBounds>(*p, Vec2<T>(T(9.9), T(0)),
+                            {Vec2<T>(T(9.9), T(0)), Vec2<T>(T(10), T(0.5)), Vec2<T>(T(3), T(0))});
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, false, false);
+  cfg.local_region = true;
+  cfg.local_radius_m = T(10);
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.diag.candidates_in_region == 2);  // 10.0 is not < 10
+  CHECK(p->out.feature[0] == 100);
+  cfg.local_radius_m = T(9.5);
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.diag.candidates_in_region == 1);
+  CHECK(p->out.feature[0] == kNewFeature);  // its only match is outside the region
+}
+
+TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new; compatible but left out is unmatched",
+                   T, float, double) {
+  auto p = make_problem<T, DefaultBounds>();
+  // Two observations at the same spot, one candidate, mutual exclusion: one pairs, the other is
+  // compatible but unpaired (unmatched); a third far away is new.
+  p->obs.count = 3;
+  p->obs.z[0] = Vec2<T>(T(5), T(0));
+  p->obs.z[1] = Vec2<T>(T(5.01), T(0));
+  p->obs.z[2] = Vec2<T>(T(2), T(1));
+  for (int i = 0; i < 3; ++i) p->obs.R[i] = Mat2<T>::Identity() * T(0.01);
+  p->pred.count = 1;
+  p->pred.id[0] = 7;
+  p->pred.h[0] = Vec2<T>(T(5), T(0));
+  p->pred.C = Mat2<T>::Identity() * T(0.01);
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, true, true);
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 7);
+  CHECK(p->out.feature[1] == kUnmatched);
+  CHECK(p->out.feature[2] == kNewFeature);
+  CHECK(p->out.pairings == 1);
+}

@@ -1,0 +1,117 @@
+// Bad input: every class gets its specific status, and the output is left exactly as it was.
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <functional>
+
+#include "geojcbb_host/scene.hpp"
+#include "support/helpers.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::test;
+
+TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untouched", T, float, double) {
+  using B = DefaultBounds;
+  host::SceneParams sp;
+  sp.observations = 6;
+  sp.landmarks = 8;
+  const host::Scene scene = host::make_scene(sp, 1234);
+  auto base = make_problem<T, B>();
+  REQUIRE(host::to_inputs(scene, base->obs, base->pred));
+  const auto cfg0 = make_config<T, B>(SearchMethod::kJcbb, true, true);
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  const T inf = std::numeric_limits<T>::infinity();
+
+  struct Case {
+    const char* name;
+    Status want;
+    std::function<void(Problem<T, B>&, AssociationConfig<T, B>&)> corrupt;
+  };
+  const Case cases[] = {
+      {"NaN range", Status::kNonFinite, [&](auto& p, auto&) { p.obs.z[2].x() = nan; }},
+      {"Inf bearing", Status::kNonFinite, [&](auto& p, auto&) { p.obs.z[0].y() = inf; }},
+      {"NaN in R", Status::kNonFinite, [&](auto& p, auto&) { p.obs.R[1](1, 1) = nan; }},
+      {"Inf in h", Status::kNonFinite, [&](auto& p, auto&) { p.pred.h[3].x() = inf; }},
+      {"NaN in C off-diagonal", Status::kNonFinite, [&](auto& p, auto&) { p.pred.C(7, 2) = nan; }},
+      {"negative range", Status::kInvalidInput, [&](auto& p, auto&) { p.obs.z[0].x() = T(-0.1); }},
+      {"bearing beyond pi", Status::kInvalidInput, [&](auto& p, auto&) { p.obs.z[0].y() = T(3.2); }},
+      {"R not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.obs.R[0](0, 1) = T(1e-3); }},
+      {"R not positive definite", Status::kNotPositiveDefinite,
+       [&](auto& p, auto&) { p.obs.R[4] << T(0.01), T(0.02), T(0.02), T(0.01); }},
+      {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
+      {"C not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 0) += T(0.5); }},
+      {"C block indefinite", Status::kNotPositiveDefinite,
+       [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
+      {"C wrong size", Status::kInvalidInput,
+       [&](auto& p, auto&) { p.pred.C.conservativeResize(2 * p.pred.count - 2, 2 * p.pred.count - 2); }},
+      {"observations over capacity", Status::kCapacityExceeded,
+       [&](auto& p, auto&) { p.obs.count = B::kMaxObservations + 1; }},
+      {"candidates over capacity", Status::kCapacityExceeded,
+       [&](auto& p, auto&) { p.pred.count = B::kMaxCandidates + 1; }},
+      {"negative count", Status::kInvalidInput, [&](auto& p, auto&) { p.obs.count = -1; }},
+      {"negative feature id", Status::kInvalidInput, [&](auto& p, auto&) { p.pred.id[1] = -3; }},
+      {"node budget 0", Status::kInvalidInput, [&](auto&, auto& c) { c.node_budget = 0; }},
+      {"node budget over capacity", Status::kInvalidInput,
+       [&](auto&, auto& c) { c.node_budget = B::kMaxJcbbNodes + 1; }},
+      {"thresholds not set", Status::kInvalidInput,
+       [&](auto&, auto& c) { c.gate = GateThresholds<T, B::kMaxObservations>{}; }},
+      {"local radius NaN", Status::kInvalidInput,
+       [&](auto&, auto& c) { c.local_region = true; c.local_radius_m = nan; }},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    auto p = std::make_unique<Problem<T, B>>(*base);
+    auto cfg = cfg0;
+    c.corrupt(*p, cfg);
+    // Sentinel output: every byte set, so any write shows.
+    std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
+    Association<T, B> before;
+    std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
+    CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == c.want);
+    CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+  }
+}
+
+TEST_CASE_TEMPLATE("an indefinite C found in the joint test is reported, output untouched", T, float,
+                   double) {
+  using B = DefaultBounds;
+  auto p = make_problem<T, B>();
+  // Two candidates whose 2x2 blocks are fine but whose cross block makes C indefinite, and R tiny.
+  p->obs.count = 2;
+  p->obs.z[0] = Vec2<T>(T(5), T(0));
+  p->obs.z[1] = Vec2<T>(T(6), T(0.5));
+  p->obs.R[0] = p->obs.R[1] = Mat2<T>::Identity() * T(1e-6);
+  p->pred.count = 2;
+  p->pred.id[0] = 0;
+  p->pred.id[1] = 1;
+  p->pred.h[0] = p->obs.z[0];
+  p->pred.h[1] = p->obs.z[1];
+  p->pred.C = decltype(p->pred.C)::Identity(4, 4);
+  p->pred.C(2, 0) = p->pred.C(0, 2) = T(3);  // |correlation| > 1
+  auto cfg = make_config<T, B>(SearchMethod::kJcbb, false, false);
+  std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
+  Association<T, B> before;
+  std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNotPositiveDefinite);
+  CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+}
+
+TEST_CASE_TEMPLATE("empty input is not an error: an empty answer", T, float, double) {
+  using B = DefaultBounds;
+  auto p = make_problem<T, B>();
+  p->pred.C.resize(0, 0);
+  for (auto search : {SearchMethod::kIcnn, SearchMethod::kJcbb}) {
+    auto cfg = make_config<T, B>(search, true, true);
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.count == 0);
+    CHECK(p->out.pairings == 0);
+    // Observations but no candidates: all new.
+    p->obs.count = 2;
+    p->obs.z[0] = p->obs.z[1] = Vec2<T>(T(1), T(0));
+    p->obs.R[0] = p->obs.R[1] = Mat2<T>::Identity();
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.feature[0] == kNewFeature);
+    CHECK(p->out.feature[1] == kNewFeature);
+    p->obs.count = 0;
+  }
+}

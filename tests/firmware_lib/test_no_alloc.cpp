@@ -1,0 +1,79 @@
+// Zero allocations: operator new and malloc are counted around every pipeline call, for every search
+// option, in float and double, at two capacity configurations (Eigen's run-time no-malloc switch is
+// off inside the guard too).
+#include <doctest/doctest.h>
+
+#include "geojcbb_host/scene.hpp"
+#include "support/alloc_counter.hpp"
+#include "support/helpers.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::test;
+
+namespace {
+template <typename T, class B>
+void check_no_alloc(int m, int n) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    host::SceneParams sp;
+    sp.observations = m;
+    sp.landmarks = n;
+    sp.max_range_m = 6;
+    const host::Scene scene = host::make_scene(sp, seed);
+    auto p = make_problem<T, B>();
+    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    for (int combo = 0; combo < 8; ++combo) {
+      auto cfg = make_config<T, B>((combo & 4) ? SearchMethod::kIcnn : SearchMethod::kJcbb, combo & 1,
+                                   combo & 2);
+      cfg.local_region = combo & 1;
+      cfg.local_radius_m = T(5);
+      Status s;
+      std::uint64_t allocs;
+      {
+        AllocationGuard guard;
+        s = associate(p->obs, p->pred, cfg, p->ws, p->out);
+        allocs = guard.allocations();
+      }
+      CHECK(s == Status::kOk);
+      CHECK(allocs == 0);
+      // Error paths allocate nothing either.
+      p->obs.z[0].x() = -1;
+      {
+        AllocationGuard guard;
+        s = associate(p->obs, p->pred, cfg, p->ws, p->out);
+        allocs = guard.allocations();
+      }
+      CHECK(s == Status::kInvalidInput);
+      CHECK(allocs == 0);
+      p->obs.z[0] = scene.z[0].cast<T>();
+      // So does computing thresholds.
+      {
+        AllocationGuard guard;
+        s = GateThresholds<T, B::kMaxObservations>::from_confidence(0.95, 0.99, cfg.gate);
+        allocs = guard.allocations();
+      }
+      CHECK(s == Status::kOk);
+      CHECK(allocs == 0);
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE("the allocation counter sees allocations (self-test)") {
+  AllocationGuard guard;
+  auto* v = new int(3);
+  CHECK(guard.allocations() >= 1);
+  delete v;
+  if (counts_malloc()) {
+    const auto before = guard.allocations();
+    void* volatile q = std::malloc(16);  // volatile: the pair must not be elided
+    CHECK(guard.allocations() == before + 1);
+    std::free(q);
+  }
+}
+
+TEST_CASE_TEMPLATE("associate() allocates nothing (small bounds)", T, float, double) {
+  check_no_alloc<T, SmallBounds>(7, 10);
+}
+TEST_CASE_TEMPLATE("associate() allocates nothing (default bounds)", T, float, double) {
+  check_no_alloc<T, DefaultBounds>(20, 30);
+}
