@@ -66,7 +66,7 @@ TEST_CASE("chi2_inv rejects a level outside (0, 1) and a bad dof") {
   CHECK(x == 42);
 }
 
-TEST_CASE_TEMPLATE("gate thresholds: joint[p] is chi2inv(alpha, 2p); raw thresholds are validated", T,
+TEST_CASE_TEMPLATE("gate thresholds: joint[p] is chi2inv(alpha, 2p) - raw thresholds are validated", T,
                    float, double) {
   using G = geojcbb::GateThresholds<T, 20>;
   G g;

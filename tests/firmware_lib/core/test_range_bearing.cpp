@@ -8,7 +8,7 @@
 
 using namespace geojcbb;
 
-TEST_CASE("wrap_angle maps into (-pi, pi]") {
+TEST_CASE("wrap_angle maps into the interval from -pi (excluded) to pi") {
   CHECK(wrap_angle(kPi<double>) == doctest::Approx(kPi<double>));
   CHECK(wrap_angle(-kPi<double>) == doctest::Approx(kPi<double>));
   CHECK(wrap_angle(3 * kPi<double>) == doctest::Approx(kPi<double>));
@@ -51,7 +51,7 @@ TEST_CASE("observe: Jacobians equal central finite differences") {
   }
 }
 
-TEST_CASE("inverse_observe: inverts observe; Jacobians equal finite differences") {
+TEST_CASE("inverse_observe: inverts observe - Jacobians equal finite differences") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-5, 5);
   const double h = 1e-6;

@@ -68,7 +68,7 @@ TEST_CASE_TEMPLATE("local region keeps candidates with predicted range < r + d o
   CHECK(p->out.feature[0] == kNewFeature);  // its only match is outside the region
 }
 
-TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new; compatible but left out is unmatched",
+TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new - compatible but left out is unmatched",
                    T, float, double) {
   auto p = make_problem<T, DefaultBounds>();
   // Two observations at the same spot, one candidate, mutual exclusion: one pairs, the other is

@@ -24,7 +24,7 @@ host::SceneParams dense_params(int m, int n) {
 }
 }  // namespace
 
-TEST_CASE_TEMPLATE("the node budget is respected and flagged; the answer is still jointly compatible", T,
+TEST_CASE_TEMPLATE("the node budget is respected and flagged - the answer is still jointly compatible", T,
                    float, double) {
   using B = DefaultBounds;
   int hits = 0;
@@ -65,7 +65,7 @@ TEST_CASE_TEMPLATE("with a budget that suffices, the answer equals the unbudgete
   }
 }
 
-TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation; off, two may share it", T, float,
+TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation - off, two may share it", T, float,
                    double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();
