@@ -70,6 +70,8 @@ int main(int argc, char** argv) {
   double confidence = 0.99;
   double mrpt_cell_cap_s = 20.0;
   std::string csv;
+  std::vector<int> dense_m{6, 8, 10};
+  bool dense_only = false;
   app.add_option("--scenes", scenes, "scenes per cell")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "first scene seed (scene k of a cell uses seed + k)");
   app.add_option("--confidence", confidence, "chi-square level of the individual and joint tests")
@@ -78,13 +80,15 @@ int main(int argc, char** argv) {
   app.add_option("--mrpt-kdtree", kdtree, "MRPT's kd-tree prefilter of individual compatibility (its default: on)");
   app.add_option("--mrpt-cell-cap-s", mrpt_cell_cap_s,
                  "stop calling MRPT-JCBB in a cell once its calls there have taken this many seconds");
+  app.add_option("--dense-m", dense_m, "observations per scan in the dense-map cells");
+  app.add_flag("--dense-only", dense_only, "only the dense-map cells");
   app.add_option("--csv", csv, "also write the table as CSV to this file");
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Cell> cells;
   for (int n : {20, 50, 100}) {
     for (int m : {5, 10, 20, 30}) {
-      if (quick && m > 10) continue;
+      if ((quick && m > 10) || dense_only) continue;
       host::SceneParams p;
       p.observations = m;
       p.landmarks = n;
@@ -92,7 +96,7 @@ int main(int argc, char** argv) {
       cells.push_back({"standard", m, n, p});
     }
   }
-  for (int m : {10, 20, 30}) {
+  for (int m : dense_m) {
     if (quick && m > 10) continue;
     host::SceneParams p;  // dense: 50 landmarks in a 4 m field of view, larger pose error
     p.observations = m;

@@ -19,9 +19,11 @@ template <typename T> using Mat32 = Eigen::Matrix<T, 3, 2>;
 template <typename T> constexpr T kPi = T(3.14159265358979323846264338327950288L);
 template <typename T> constexpr T kTwoPi = T(6.28318530717958647692528676655900577L);
 
-/// Wraps an angle into (-pi, pi]. Exact for inputs already in range; uses std::remainder (no loop).
+/// Wraps an angle into (-pi, pi]. Inputs already in range return unchanged (the common case for
+/// innovations); others go through std::remainder (no loop).
 template <typename T>
 T wrap_angle(T a) {
+  if (a > -kPi<T> && a <= kPi<T>) return a;
   T r = std::remainder(a, kTwoPi<T>);  // in [-pi, pi]
   if (r <= -kPi<T>) r += kTwoPi<T>;
   return r;
