@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
   double ratio_m20_n50 = 0;
   for (const Cell& cell : cells) {
     Stats st[kMethods];
-    double mrpt_jcbb_total_s = 0;
+    [[maybe_unused]] double mrpt_jcbb_total_s = 0;
 #if !GEOJCBB_WITH_MRPT
     st[kMrptNn].available = st[kMrptJcbb].available = false;
 #endif

@@ -71,6 +71,44 @@ TEST_CASE("the allocation counter sees allocations (self-test)") {
   }
 }
 
+namespace {
+template <typename T, class B>
+void check_no_alloc_strategies(int m, int n) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    host::SceneParams sp;
+    sp.observations = m;
+    sp.landmarks = n;
+    sp.max_range_m = 8;
+    const host::Scene scene = host::make_scene(sp, seed);
+    auto p = make_problem<T, B>();
+    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    for (int s = 0; s < kStrategyCount; ++s) {
+      for (int k : {0, 3}) {  // GMM-EM by BIC and fixed K
+        StrategyParams<T> sp2;
+        sp2.local_radius_m = T(6);
+        sp2.groups = k;
+        AssociationConfig<T, B> cfg;
+        REQUIRE(make_strategy(static_cast<Strategy>(s), sp2, cfg) == Status::kOk);
+        Status st;
+        std::uint64_t allocs;
+        {
+          AllocationGuard guard;
+          st = associate(p->obs, p->pred, cfg, p->ws, p->out);
+          allocs = guard.allocations();
+        }
+        CHECK(st == Status::kOk);
+        CHECK(allocs == 0);
+      }
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("every strategy allocates nothing (small and default bounds)", T, float, double) {
+  check_no_alloc_strategies<T, SmallBounds>(7, 10);
+  check_no_alloc_strategies<T, DefaultBounds>(20, 30);
+}
+
 TEST_CASE_TEMPLATE("associate() allocates nothing (small bounds)", T, float, double) {
   check_no_alloc<T, SmallBounds>(7, 10);
 }

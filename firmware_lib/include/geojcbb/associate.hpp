@@ -1,15 +1,21 @@
 // The association pipeline: the only file that knows the order of the stages.
-//   validate -> local region + individual gate -> search (ICNN | JCBB) -> result
-// (Grouping and the merge of the grouped strategies arrive in issue 3, between gate and result.)
+//   validate -> local region + individual gate -> group (none | k-means | DBSCAN | GMM-EM)
+//   -> search per group (ICNN | JCBB, one node budget shared by the groups)
+//   -> merge (mutual exclusion across groups, joint re-check) -> result
 // No heap: all working memory is the caller's Workspace; outputs are written only on kOk.
 #pragma once
 
+#include "geojcbb/cluster/dbscan.hpp"
+#include "geojcbb/cluster/gmm_em.hpp"
+#include "geojcbb/cluster/kmeans.hpp"
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/strategy.hpp"
 #include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/gate/validate.hpp"
 #include "geojcbb/jcbb/icnn.hpp"
 #include "geojcbb/jcbb/jcbb.hpp"
+#include "geojcbb/merge/merge.hpp"
 
 namespace geojcbb {
 
@@ -19,39 +25,103 @@ struct Workspace {
   CompatibilityTable<T, B> table;
   JcbbWorkspace<T, B> jcbb;
   SearchOutcome<T, B> outcome;
+  Points<T, B> points;
+  Groups<B> groups;
+  EmWorkspace<T, B> em;
+  MergeWorkspace<T, B> merge;
+  std::array<Hypothesis, B::kMaxObservations> hyp;
 };
+
+namespace pipeline_detail {
+
+/// Step 3b: splits the observations into groups. Returns the groups in ws.groups.
+template <typename T, class B>
+void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
+           AssociationDiagnostics& diag) {
+  const int m = obs.count;
+  Groups<B>& g = ws.groups;
+  if (cfg.grouping == Grouping::kNone || m == 0) {
+    for (int i = 0; i < m; ++i) g.label[i] = 0;  // <= kMaxObservations
+    g.count = m > 0 ? 1 : 0;
+    return;
+  }
+  observation_points(obs, ws.points);
+  if (cfg.grouping == Grouping::kKMeans) {
+    const KMeansStats st = kmeans(ws.points, m, cfg.groups, cfg.kmeans_max_iterations, g);
+    diag.cluster_iterations = static_cast<std::uint16_t>(st.iterations);
+    diag.cluster_bound_hit = !st.converged;
+  } else if (cfg.grouping == Grouping::kDbscan) {
+    const DbscanStats st = dbscan(ws.points, m, cfg.dbscan_eps_m, cfg.dbscan_min_points, g);
+    diag.cluster_bound_hit = st.merged_for_capacity;
+  } else {
+    const EmStats st = gmm_em(ws.points, m, cfg.groups, cfg.em, ws.em, g);
+    diag.cluster_iterations = static_cast<std::uint16_t>(st.total_iterations);
+    diag.cluster_bound_hit = !st.converged;
+  }
+}
+
+}  // namespace pipeline_detail
 
 /// Associates one scan's observations with the predicted candidates.
 /// @param[in]  obs   observations (range, bearing) and their noise
 /// @param[in]  pred  candidate ids, predicted measurements h and their joint covariance C
-/// @param[in]  cfg   options (see AssociationConfig)
+/// @param[in]  cfg   options (see AssociationConfig; presets in core/strategy.hpp)
 /// @param[in,out] ws working memory
 /// @param[out] out   the hypothesis; written only when kOk is returned
-/// @return kOk (an empty scan gives an empty answer; a spent node budget is flagged in
-///         out.diag.node_budget_hit); otherwise the first failing check of validate(), or
-///         kNotPositiveDefinite when C is found indefinite during the joint test.
+/// @return kOk (an empty scan gives an empty answer; spent budgets are flagged in out.diag);
+///         otherwise the first failing check of validate(), or kNotPositiveDefinite when C is found
+///         indefinite during a joint test.
 template <typename T, class B>
 [[nodiscard]] Status associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
                                Association<T, B>& out) {
   Status s = validate(obs, pred, cfg);
   if (s != Status::kOk) return s;
+  const int m = obs.count;
   AssociationDiagnostics diag{};
   build_compatibility(obs, pred, cfg, ws.table, diag);
-  SearchOutcome<T, B>& o = ws.outcome;
+  T joint_d2 = T(0);
   if (cfg.search == SearchMethod::kIcnn) {
-    icnn_search(obs.count, cfg.mutual_exclusion, ws.table, ws.jcbb, pred.count, o);
-    s = hypothesis_joint_d2(obs, pred, o.best, ws.jcbb.joint, o.joint_d2);
+    SearchOutcome<T, B>& o = ws.outcome;
+    icnn_search(m, cfg.mutual_exclusion, ws.table, ws.jcbb, pred.count, o);
+    for (int i = 0; i < m; ++i) ws.hyp[i] = o.best[i];  // <= kMaxObservations
+    s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
+    if (s != Status::kOk) return s;
   } else {
-    s = jcbb_search(obs, pred, cfg, ws.table, ws.jcbb, o);
+    pipeline_detail::group(obs, cfg, ws, diag);
+    diag.groups = static_cast<std::uint8_t>(ws.groups.count);
+    std::uint32_t nodes_left = static_cast<std::uint32_t>(cfg.node_budget);
+    for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
+    for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
+      SearchOutcome<T, B>& o = ws.outcome;
+      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o);
+      if (s != Status::kOk) return s;
+      nodes_left -= o.nodes;
+      diag.jcbb_nodes += o.nodes;
+      diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
+      for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+        if (ws.groups.label[i] == g) ws.hyp[i] = o.best[i];
+      }
+      joint_d2 = o.joint_d2;
+    }
+    if (ws.groups.count != 1) joint_d2 = T(-1);  // a union: its D2 is computed by the merge
+    MergeStats ms;
+    s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
+    if (s != Status::kOk) return s;
+    diag.merge_conflicts = ms.conflicts;
+    diag.recheck_failed = ms.recheck_failed;
+    diag.recheck_dropped = ms.repair_dropped;
+    diag.jcbb_nodes += ms.repair_nodes;
+    diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
   }
-  if (s != Status::kOk) return s;
 
-  out.count = obs.count;
-  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
-    const int c = o.best[i];
+  int pairings = 0;
+  out.count = m;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    const int c = ws.hyp[i];
     out.candidate[i] = static_cast<std::int16_t>(c);
     if (c >= 0) {
+      ++pairings;
       out.feature[i] = pred.id[c];
       const Mat2<T> S = pred.C.template block<2, 2>(2 * c, 2 * c) + obs.R[i];
       out.d2[i] = mahalanobis2(innovation(obs.z[i], pred.h[c]), S);
@@ -60,11 +130,9 @@ template <typename T, class B>
       out.d2[i] = ws.table.nearest_d2[i];
     }
   }
-  out.pairings = o.pairings;
-  out.joint_d2 = o.joint_d2;
-  out.jointly_compatible = o.joint_d2 <= cfg.gate.joint[o.pairings];
-  diag.jcbb_nodes = o.nodes;
-  diag.node_budget_hit = o.budget_hit;
+  out.pairings = pairings;
+  out.joint_d2 = joint_d2;
+  out.jointly_compatible = joint_d2 <= cfg.gate.joint[pairings];
   out.diag = diag;
   return Status::kOk;
 }

@@ -2,6 +2,9 @@
 // the grouped ones of issue 3) are presets of these switches, not separate code paths.
 #pragma once
 
+#include "geojcbb/cluster/dbscan.hpp"
+#include "geojcbb/cluster/gmm_em.hpp"
+#include "geojcbb/cluster/kmeans.hpp"
 #include "geojcbb/core/capacity.hpp"
 #include "geojcbb/gate/thresholds.hpp"
 
@@ -12,9 +15,28 @@ enum class SearchMethod : std::uint8_t {
   kJcbb,  ///< joint compatibility branch and bound (Neira & Tardos 2001)
 };
 
+/// How the observations are split before JCBB runs per group (ARCHITECTURE.md, step 3b).
+enum class Grouping : std::uint8_t {
+  kNone,    ///< one group: plain JCBB
+  kKMeans,  ///< k-means (KJCBB)
+  kDbscan,  ///< DBSCAN (DFJCBB)
+  kGmmEm,   ///< Gaussian mixture by EM (GEMJCBB, GEOJCBB)
+};
+
 template <typename T, class B>
 struct AssociationConfig {
   SearchMethod search = SearchMethod::kJcbb;
+  Grouping grouping = Grouping::kNone;
+  /// Groups for k-means and GMM-EM, 1 .. MaxGroups; for GMM-EM 0 chooses K by BIC.
+  int groups = 3;
+  int kmeans_max_iterations = kMaxKMeansIterations;  ///< 1 .. kMaxKMeansIterations
+  T dbscan_eps_m = T(1.5);                           ///< DBSCAN neighbourhood radius [m]
+  int dbscan_min_points = 2;                         ///< DBSCAN core-point threshold (itself included)
+  EmOptions<T> em;                                   ///< GMM-EM options (iterations <= kMaxEmIterations)
+  /// Our addition: test the merged hypothesis jointly and, when it fails, keep its largest jointly
+  /// compatible subset (merge/merge.hpp). The groups share the robot pose error, so a union of
+  /// per-group answers can be jointly incompatible.
+  bool joint_recheck = true;
   /// Local association region (2019 paper, eq. 5): only candidates with predicted range < r + d.
   bool local_region = false;
   T local_radius_m = T(0);  ///< r + d [m]; used when local_region is on
@@ -24,7 +46,8 @@ struct AssociationConfig {
   bool optimal_criterion = false;
   /// Search observations with the fewest compatible candidates first (smaller tree, same answer).
   bool order_fewest_candidates_first = true;
-  /// Interpretation-tree nodes per call, 1 .. B::kMaxJcbbNodes.
+  /// Interpretation-tree nodes per scan, shared by every group's search, 1 .. B::kMaxJcbbNodes.
+  /// The re-check's repair search may add up to 2 * MaxObservations more.
   int node_budget = B::kMaxJcbbNodes;
   GateThresholds<T, B::kMaxObservations> gate;  ///< set with GateThresholds::from_confidence
 };

@@ -58,6 +58,14 @@ struct AssociationDiagnostics {
   std::uint16_t candidates_in_region = 0;  ///< candidates left after the local region (eq. 5)
   std::uint16_t compatible_pairs = 0;    ///< (observation, candidate) pairs passing the individual gate
   bool node_budget_hit = false;          ///< JCBB stopped at its node budget: best-so-far returned
+  std::uint8_t groups = 0;               ///< observation groups searched
+  std::uint16_t cluster_iterations = 0;  ///< k-means or EM iterations (EM: over every BIC fit)
+  /// The clustering stopped at its iteration bound before converging (k-means, EM), or DBSCAN
+  /// merged groups beyond MaxGroups.
+  bool cluster_bound_hit = false;
+  std::uint16_t merge_conflicts = 0;     ///< features claimed by two groups (mutual exclusion)
+  bool recheck_failed = false;           ///< the merged union failed the joint test and was repaired
+  std::uint16_t recheck_dropped = 0;     ///< pairings the repair removed
 };
 
 template <typename T, class B>

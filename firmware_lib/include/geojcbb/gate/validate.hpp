@@ -29,6 +29,15 @@ template <typename T, class B>
   if (cfg.local_region && !(std::isfinite(cfg.local_radius_m) && cfg.local_radius_m > T(0))) {
     return Status::kInvalidInput;
   }
+  const int min_groups = cfg.grouping == Grouping::kGmmEm ? 0 : 1;  // EM: 0 chooses K by BIC
+  if (cfg.groups < min_groups || cfg.groups > B::kMaxGroups ||
+      cfg.kmeans_max_iterations < 1 || cfg.kmeans_max_iterations > kMaxKMeansIterations ||
+      cfg.em.max_iterations < 1 || cfg.em.max_iterations > kMaxEmIterations ||
+      !(std::isfinite(cfg.em.tolerance) && cfg.em.tolerance >= T(0)) ||
+      !(std::isfinite(cfg.em.covariance_floor_m2) && cfg.em.covariance_floor_m2 > T(0)) ||
+      !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
+    return Status::kInvalidInput;
+  }
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
     if (obs.z[i].x() < T(0) || std::abs(obs.z[i].y()) > kPi<T>) return Status::kInvalidInput;

@@ -38,15 +38,22 @@ struct JcbbWorkspace {
   std::array<std::uint8_t, B::kMaxCandidates> used;       ///< candidate -> pairings holding it
 };
 
-/// The levels of the interpretation tree: observations with at least one compatible candidate, in
-/// observation order or (stably) by fewest candidates first. Returns the number of levels.
-/// Bound: insertion sort of <= MaxObservations entries.
+/// The observations one search covers: all, or those of one group.
+struct ObservationSubset {
+  const std::int8_t* label = nullptr;  ///< per observation group label; null: every observation
+  int group = 0;
+  bool contains(int i) const { return label == nullptr || label[i] == group; }
+};
+
+/// The levels of the interpretation tree: observations of the subset with at least one compatible
+/// candidate, in observation order or (stably) by fewest candidates first. Returns the number of
+/// levels.  Bound: insertion sort of <= MaxObservations entries.
 template <typename T, class B>
-int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first,
+int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first, ObservationSubset subset,
                  std::array<std::int8_t, B::kMaxObservations>& order) {
   int levels = 0;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    if (table.count[i] == 0) continue;
+    if (table.count[i] == 0 || !subset.contains(i)) continue;
     int k = levels++;
     for (; fewest_first && k > 0 && table.count[order[k - 1]] > table.count[i]; --k) {
       order[k] = order[k - 1];
@@ -56,18 +63,22 @@ int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first
   return levels;
 }
 
-/// Runs JCBB. Inputs must be validated and the table built for the same inputs and config.
+/// Runs JCBB over a subset of the observations. Inputs must be validated and the table built for
+/// the same inputs and config.
+/// @param node_budget  nodes this search may expand (>= 0; 0 returns the empty hypothesis, flagged)
 /// @return kOk (also when the node budget ran out: see out.budget_hit); kNotPositiveDefinite when a
 ///         joint covariance has a non-positive pivot (C not PSD). On error `out` is unspecified.
+///         out.best is -1 outside the subset.
 template <typename T, class B>
 [[nodiscard]] Status jcbb_search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                  const AssociationConfig<T, B>& cfg,
-                                 const CompatibilityTable<T, B>& table, JcbbWorkspace<T, B>& ws,
+                                 const CompatibilityTable<T, B>& table, ObservationSubset subset,
+                                 std::uint32_t node_budget, JcbbWorkspace<T, B>& ws,
                                  SearchOutcome<T, B>& out) {
-  const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, ws.order);
+  const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, subset, ws.order);
   const bool exclusion = cfg.mutual_exclusion;
   const bool optimal = cfg.optimal_criterion;
-  const auto budget = static_cast<std::uint32_t>(cfg.node_budget);
+  const std::uint32_t budget = node_budget;
   ws.joint.clear();
   for (int j = 0; j < pred.count; ++j) ws.used[j] = 0;  // <= kMaxCandidates
   for (int i = 0; i < obs.count; ++i) {                 // <= kMaxObservations

@@ -1,0 +1,73 @@
+// core: the six named strategies as presets of AssociationConfig (ARCHITECTURE.md's table).
+//   preset   local region  grouping  mutual exclusion  optimal criterion
+//   ICNN     no            none      no                -
+//   JCBB     no            none      no                no
+//   KJCBB    no            k-means   no                no
+//   DFJCBB   no            DBSCAN    no                no
+//   GEMJCBB  yes           GMM-EM    no                no
+//   GEOJCBB  yes           GMM-EM    yes               yes
+// The joint re-check of merged hypotheses (our addition) is on by default in the grouped presets;
+// StrategyParams switches it off to reproduce the papers' methods exactly.
+#pragma once
+
+#include "geojcbb/core/association_config.hpp"
+
+namespace geojcbb {
+
+enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb };
+constexpr int kStrategyCount = 6;
+
+constexpr const char* to_string(Strategy s) {
+  switch (s) {
+    case Strategy::kIcnn: return "ICNN";
+    case Strategy::kJcbb: return "JCBB";
+    case Strategy::kKjcbb: return "KJCBB";
+    case Strategy::kDfjcbb: return "DFJCBB";
+    case Strategy::kGemjcbb: return "GEMJCBB";
+    case Strategy::kGeojcbb: return "GEOJCBB";
+  }
+  return "?";
+}
+
+template <typename T>
+struct StrategyParams {
+  double confidence = 0.99;  ///< chi-square level of the individual and joint tests
+  T local_radius_m = T(0);   ///< r + d (eq. 5); must be > 0 for GEMJCBB and GEOJCBB
+  int groups = 3;            ///< K for k-means and GMM-EM (the papers use 3 to 5); 0: BIC (EM)
+  T dbscan_eps_m = T(1.5);
+  int dbscan_min_points = 2;
+  bool joint_recheck = true;
+  int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
+};
+
+/// Builds a strategy's configuration.
+/// @return kOk; kInvalidInput when a grouped-region strategy has no radius or a parameter is out of
+///         range; kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
+template <typename T, class B>
+[[nodiscard]] Status make_strategy(Strategy s, const StrategyParams<T>& p, AssociationConfig<T, B>& out) {
+  AssociationConfig<T, B> c;
+  const Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, c.gate);
+  if (st != Status::kOk) return st;
+  if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget < 0 || p.node_budget > B::kMaxJcbbNodes) {
+    return Status::kInvalidInput;
+  }
+  c.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
+  c.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
+               : s == Strategy::kDfjcbb ? Grouping::kDbscan
+               : (s == Strategy::kGemjcbb || s == Strategy::kGeojcbb) ? Grouping::kGmmEm
+                                                                     : Grouping::kNone;
+  c.local_region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
+  if (c.local_region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
+  c.local_radius_m = p.local_radius_m;
+  c.mutual_exclusion = s == Strategy::kGeojcbb;
+  c.optimal_criterion = s == Strategy::kGeojcbb;
+  c.groups = p.groups == 0 && c.grouping != Grouping::kGmmEm ? 3 : p.groups;
+  c.dbscan_eps_m = p.dbscan_eps_m;
+  c.dbscan_min_points = p.dbscan_min_points;
+  c.joint_recheck = p.joint_recheck;
+  c.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
+  out = c;
+  return Status::kOk;
+}
+
+}  // namespace geojcbb
