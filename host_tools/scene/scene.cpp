@@ -20,13 +20,19 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   Scene s;
   const int n = p.landmarks;
   s.true_pose = {0.0, 0.0, (2 * uni(rng) - 1) * 0.5};
+  auto point_in_map = [&](const Pose2<double>& pose) {
+    if (p.map_range_m <= 0) return point_in_view(pose);
+    const double r = p.map_range_m * std::sqrt(uni(rng));
+    const double b = kTwoPi<double> * uni(rng);
+    return Eigen::Vector2d(pose.x + r * std::cos(b), pose.y + r * std::sin(b));
+  };
   for (int tries = 0; static_cast<int>(s.true_landmarks.size()) < n && tries < 200 * n; ++tries) {
-    const Eigen::Vector2d l = point_in_view(s.true_pose);
+    const Eigen::Vector2d l = point_in_map(s.true_pose);
     bool ok = true;
     for (const auto& o : s.true_landmarks) ok = ok && (o - l).norm() >= p.min_separation_m;
     if (ok) s.true_landmarks.push_back(l);
   }
-  while (static_cast<int>(s.true_landmarks.size()) < n) s.true_landmarks.push_back(point_in_view(s.true_pose));
+  while (static_cast<int>(s.true_landmarks.size()) < n) s.true_landmarks.push_back(point_in_map(s.true_pose));
 
   // e = A w: w = [common rigid (3) | robot (3) | landmark j (2) ...].
   const int dim = 3 + 2 * n;
@@ -71,9 +77,15 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   s.R = Eigen::Vector2d(p.sigma_range_m * p.sigma_range_m, p.sigma_bearing_rad * p.sigma_bearing_rad)
             .asDiagonal();
   const int clutter = static_cast<int>(std::lround(p.clutter_fraction * p.observations));
-  const int real = std::min(p.observations - clutter, n);
-  std::vector<int> idx(n);
-  for (int j = 0; j < n; ++j) idx[j] = j;
+  std::vector<int> idx;  // landmarks in the sensor's view (all of them when map_range_m is 0)
+  for (int j = 0; j < n; ++j) {
+    const Vec2<double> z = observe(s.true_pose, Vec2<double>(s.true_landmarks[j]));
+    if (p.map_range_m <= 0 ||
+        (z.x() >= p.min_range_m && z.x() <= p.max_range_m && std::abs(z.y()) <= p.max_abs_bearing_rad)) {
+      idx.push_back(j);
+    }
+  }
+  const int real = std::min(p.observations - clutter, static_cast<int>(idx.size()));
   std::shuffle(idx.begin(), idx.end(), rng);
   for (int k = 0; k < real; ++k) s.truth.push_back(idx[k]);
   while (static_cast<int>(s.truth.size()) < p.observations) s.truth.push_back(-1);

@@ -94,7 +94,8 @@ template <typename T, class B>
     for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
     for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
       SearchOutcome<T, B>& o = ws.outcome;
-      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o);
+      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o,
+                      cfg.condition_groups ? &ws.hyp : nullptr);
       if (s != Status::kOk) return s;
       nodes_left -= o.nodes;
       diag.jcbb_nodes += o.nodes;
@@ -104,7 +105,9 @@ template <typename T, class B>
       }
       joint_d2 = o.joint_d2;
     }
-    if (ws.groups.count != 1) joint_d2 = T(-1);  // a union: its D2 is computed by the merge
+    // Conditioned groups: the last search's D2 covers the whole union. Independent groups: the union's
+    // D2 is computed by the merge.
+    if (ws.groups.count != 1 && !cfg.condition_groups) joint_d2 = T(-1);
     MergeStats ms;
     s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
     if (s != Status::kOk) return s;

@@ -115,3 +115,31 @@ TEST_CASE_TEMPLATE("empty input is not an error: an empty answer", T, float, dou
     p->obs.count = 0;
   }
 }
+
+TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: inside the region", T, float,
+                   double) {
+  using B = DefaultBounds;
+  auto p = make_problem<T, B>();
+  p->obs.count = 1;
+  p->obs.z[0] = Vec2<T>(T(4), T(0));
+  p->obs.R[0] = Mat2<T>::Identity() * T(0.01);
+  p->pred.count = 3;
+  const T ranges[] = {T(4), T(6), T(30)};  // the last is outside r + d = 10 m
+  p->pred.C = decltype(p->pred.C)::Identity(6, 6) * T(0.01);
+  for (int j = 0; j < 3; ++j) {
+    p->pred.id[j] = j;
+    p->pred.h[j] = Vec2<T>(ranges[j], T(0));
+  }
+  auto cfg = make_config<T, B>(SearchMethod::kJcbb, true, true);
+  cfg.local_region = true;
+  cfg.local_radius_m = T(10);
+  p->pred.C(5, 1) = std::numeric_limits<T>::quiet_NaN();  // cross term of candidate 2 (outside)
+  p->pred.C(4, 4) = T(-1);                                // its own block, indefinite
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 0);
+  cfg.local_region = false;  // now every candidate is read
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
+  cfg.local_region = true;
+  p->pred.C(3, 0) = std::numeric_limits<T>::quiet_NaN();  // cross term between two candidates inside
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
+}

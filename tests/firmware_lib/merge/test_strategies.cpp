@@ -166,3 +166,34 @@ TEST_CASE_TEMPLATE("the re-check repairs unions that fail the joint test", T, fl
   CHECK(failing_without > 0);  // the scenes do exercise the repair
   CHECK(repaired == failing_without);
 }
+
+TEST_CASE_TEMPLATE("conditioned groups: the union is jointly compatible by construction, exclusion holds", T,
+                   float, double) {
+  using B = DefaultBounds;
+  std::mt19937_64 rng(81);
+  for (int k = 0; k < 200; ++k) {
+    host::SceneParams sp;
+    sp.observations = 20;
+    sp.landmarks = 30;
+    sp.max_range_m = 8;
+    sp.sigma_pose_xy_m = 0.1;
+    sp.sigma_pose_theta_rad = 0.08;
+    sp.sigma_landmark_m = 0.05;
+    const host::Scene scene = host::make_scene(sp, rng());
+    auto p = make_problem<T, B>();
+    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    for (Strategy s : {Strategy::kKjcbb, Strategy::kDfjcbb, Strategy::kGemjcbb, Strategy::kGeojcbb}) {
+      auto cfg = strategy<T, B>(s, false);  // no re-check: nothing repairs the union afterwards
+      cfg.condition_groups = true;
+      cfg.groups = 5;
+      REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+      CHECK(p->out.jointly_compatible);
+      CHECK(p->out.diag.merge_conflicts == 0);
+      if (cfg.mutual_exclusion) {
+        for (int a = 0; a < p->obs.count; ++a)
+          for (int b = a + 1; b < p->obs.count; ++b)
+            CHECK((p->out.candidate[a] < 0 || p->out.candidate[a] != p->out.candidate[b]));
+      }
+    }
+  }
+}

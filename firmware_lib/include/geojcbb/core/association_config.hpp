@@ -37,6 +37,12 @@ struct AssociationConfig {
   /// compatible subset (merge/merge.hpp). The groups share the robot pose error, so a union of
   /// per-group answers can be jointly incompatible.
   bool joint_recheck = true;
+  /// Our addition: search the groups one after another, each conditioned on the pairings already
+  /// chosen for the earlier groups (every joint test covers the whole scan so far; exclusion sees
+  /// their features as taken). The union is then jointly compatible by construction and the groups
+  /// share the pose information their pairings carry. Off: the groups are searched independently
+  /// and merged (the papers' method).
+  bool condition_groups = false;
   /// Local association region (2019 paper, eq. 5): only candidates with predicted range < r + d.
   bool local_region = false;
   T local_radius_m = T(0);  ///< r + d [m]; used when local_region is on

@@ -37,6 +37,7 @@ struct StrategyParams {
   T dbscan_eps_m = T(1.5);
   int dbscan_min_points = 2;
   bool joint_recheck = true;
+  bool condition_groups = false;  ///< our conditioned group search (AssociationConfig)
   int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
 };
 
@@ -65,6 +66,7 @@ template <typename T, class B>
   c.dbscan_eps_m = p.dbscan_eps_m;
   c.dbscan_min_points = p.dbscan_min_points;
   c.joint_recheck = p.joint_recheck;
+  c.condition_groups = p.condition_groups;
   c.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
   out = c;
   return Status::kOk;

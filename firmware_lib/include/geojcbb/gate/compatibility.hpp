@@ -29,6 +29,13 @@ T mahalanobis2(const Vec2<T>& nu, const Mat2<T>& S) {
          det;
 }
 
+/// The local association region (2019 paper, eq. 5): predicted range < r + d, or everything when the
+/// region is off. The sensor sits at the robot's origin, so the predicted range is the distance.
+template <typename T, class B>
+bool in_local_region(const AssociationConfig<T, B>& cfg, const Vec2<T>& h) {
+  return !cfg.local_region || h.x() < cfg.local_radius_m;
+}
+
 template <typename T, class B>
 struct CompatibilityTable {
   std::array<std::int16_t, B::kMaxObservations> count;  ///< compatible candidates per observation
@@ -47,7 +54,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
   diag.candidates_in_region = 0;
   diag.compatible_pairs = 0;
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
-    table.in_region[j] = !cfg.local_region || pred.h[j].x() < cfg.local_radius_m;
+    table.in_region[j] = in_local_region(cfg, pred.h[j]);
     if (table.in_region[j]) ++diag.candidates_in_region;
   }
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations

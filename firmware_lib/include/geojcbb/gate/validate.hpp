@@ -1,12 +1,15 @@
 // gate: validation of one association call's inputs and options, before any state is touched.
 // Checks: counts within capacity, C sized 2n x 2n, every value finite, ranges >= 0, |bearing| <= pi,
-// R_i symmetric positive definite, C symmetric with positive semidefinite 2x2 diagonal blocks.
+// R_i symmetric positive definite, C symmetric with positive semidefinite 2x2 diagonal blocks. C is
+// checked on the candidates inside the local region only (all when the region is off): the call
+// reads nothing else, and the region exists to make a large map cheap.
 // (C's off-diagonal definiteness is checked where it is used: a non-positive Cholesky pivot in the
-// joint test.) Bounds: O(n^2) over C, O(m) over observations.
+// joint test.) Bounds: O(n_region^2) over C, O(m) over observations.
 #pragma once
 
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/gate/compatibility.hpp"
 
 namespace geojcbb {
 
@@ -44,23 +47,27 @@ template <typename T, class B>
     if (!nearly_equal(obs.R[i](0, 1), obs.R[i](1, 0))) return Status::kNotSymmetric;
     if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
   }
-  const int rows = 2 * pred.count;
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
     if (!pred.h[j].allFinite()) return Status::kNonFinite;
     if (pred.id[j] < 0) return Status::kInvalidInput;
   }
-  for (int c = 0; c < rows; ++c) {  // <= 2 kMaxCandidates
-    for (int r = c; r < rows; ++r) {  // <= 2 kMaxCandidates
-      const T a = pred.C(r, c);
-      const T b = pred.C(c, r);
-      if (!std::isfinite(a) || !std::isfinite(b)) return Status::kNonFinite;
-      if (!nearly_equal(a, b)) return Status::kNotSymmetric;
-    }
-  }
+  // C is checked where the call reads it: the blocks of candidates inside the local region (all
+  // candidates when the region is off), lower triangle against upper.
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
-    if (!is_psd(Mat2<T>(pred.C.template block<2, 2>(2 * j, 2 * j)))) {
-      return Status::kNotPositiveDefinite;
+    if (!in_local_region(cfg, pred.h[j])) continue;
+    for (int k = j; k < pred.count; ++k) {  // <= kMaxCandidates
+      if (!in_local_region(cfg, pred.h[k])) continue;
+      for (int a = 0; a < 2; ++a) {
+        for (int b = 0; b < 2; ++b) {
+          if (k == j && a < b) continue;
+          const T x = pred.C(2 * k + a, 2 * j + b);
+          const T y = pred.C(2 * j + b, 2 * k + a);
+          if (!std::isfinite(x) || !std::isfinite(y)) return Status::kNonFinite;
+          if (!nearly_equal(x, y)) return Status::kNotSymmetric;
+        }
+      }
     }
+    if (!is_psd(Mat2<T>(pred.C.template block<2, 2>(2 * j, 2 * j)))) return Status::kNotPositiveDefinite;
   }
   return Status::kOk;
 }

@@ -66,6 +66,10 @@ int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first
 /// Runs JCBB over a subset of the observations. Inputs must be validated and the table built for
 /// the same inputs and config.
 /// @param node_budget  nodes this search may expand (>= 0; 0 returns the empty hypothesis, flagged)
+/// @param prefix  when not null: pairings already fixed (per observation: candidate or -1; entries of
+///                the subset must be -1). The search extends them: every joint test covers prefix and
+///                extension, with thresholds for their total, and mutual exclusion counts the
+///                prefix's features as taken. out.pairings and out.joint_d2 are totals.
 /// @return kOk (also when the node budget ran out: see out.budget_hit); kNotPositiveDefinite when a
 ///         joint covariance has a non-positive pivot (C not PSD). On error `out` is unspecified.
 ///         out.best is -1 outside the subset.
@@ -74,7 +78,8 @@ template <typename T, class B>
                                  const AssociationConfig<T, B>& cfg,
                                  const CompatibilityTable<T, B>& table, ObservationSubset subset,
                                  std::uint32_t node_budget, JcbbWorkspace<T, B>& ws,
-                                 SearchOutcome<T, B>& out) {
+                                 SearchOutcome<T, B>& out,
+                                 const std::array<std::int16_t, B::kMaxObservations>* prefix = nullptr) {
   const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, subset, ws.order);
   const bool exclusion = cfg.mutual_exclusion;
   const bool optimal = cfg.optimal_criterion;
@@ -85,10 +90,21 @@ template <typename T, class B>
     ws.current[i] = -1;
     out.best[i] = -1;
   }
-  out.pairings = 0;
-  out.joint_d2 = T(0);
   out.nodes = 0;
   out.budget_hit = false;
+  if (prefix != nullptr) {
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int c = (*prefix)[i];
+      if (c < 0) continue;
+      T d2 = T(0);
+      const Status s = ws.joint.try_push(pred.C, c, obs.R[i], innovation(obs.z[i], pred.h[c]), d2);
+      if (s != Status::kOk) return s;
+      ws.joint.commit();
+      ++ws.used[c];
+    }
+  }
+  out.pairings = ws.joint.pairs();  // the prefix alone: the empty extension
+  out.joint_d2 = ws.joint.d2();
 
   // Levels after k whose observation still has a compatible candidate free to take.
   auto remaining_after = [&](int k) {

@@ -19,7 +19,10 @@ struct SceneParams {
   int observations = 10;           ///< M: observations in the scan (real + clutter)
   int landmarks = 20;              ///< N: mapped landmarks, all offered as candidates
   double clutter_fraction = 0.2;   ///< share of the M observations that are clutter
-  double max_range_m = 8.0;        ///< landmarks and clutter lie within this range
+  double max_range_m = 8.0;        ///< the sensor sees landmarks (and clutter) within this range
+  /// Landmarks are mapped within this distance of the robot, all around; 0: only within the field
+  /// of view and max_range_m (every landmark observable).
+  double map_range_m = 0.0;
   double min_range_m = 0.5;
   double max_abs_bearing_rad = 2.6;  ///< field of view; keeps bearings away from +-pi (MRPT)
   double min_separation_m = 0.0;   ///< minimum distance between true landmarks (0: none)

@@ -1,4 +1,4 @@
-// Association benchmark: our ICNN and JCBB against MRPT's data_association_full_covariance (NN and
+// Benchmark suite "mrpt": our ICNN and JCBB against MRPT's data_association_full_covariance (NN and
 // JCBB) on identical generated EKF-SLAM-like scenes, in one process, calls interleaved in rotating
 // order. Reports per cell: median / p90 / max microseconds per call, JCBB nodes, precision and recall
 // against ground truth, and the share of outputs that fail the joint compatibility test.
@@ -10,21 +10,17 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
-
-#include "geojcbb/associate.hpp"
-#include "geojcbb_host/scene.hpp"
+#include "bench_common.hpp"
 
 #if GEOJCBB_WITH_MRPT
 #include <mrpt/math/CMatrixDynamic.h>
 #include <mrpt/slam/data_association.h>
 #endif
 
+namespace geojcbb::bench {
 namespace {
 
-using namespace geojcbb;
 using B = Bounds<32, 128, 8, 200000, 128>;  // host capacity: M <= 32, N <= 128
-using Clock = std::chrono::steady_clock;
 
 enum Method { kMrptNn, kMrptJcbb, kOurIcnn, kOurJcbb, kMethods };
 const char* kNames[kMethods] = {"MRPT-NN", "MRPT-JCBB", "our ICNN", "our JCBB"};
@@ -44,13 +40,6 @@ struct Stats {
   bool available = true;
 };
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5));
-  return v[k];
-}
-
 struct Ours {
   Observations<double, B> obs;
   Prediction<double, B> pred;
@@ -61,29 +50,16 @@ struct Ours {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"geojcbb association benchmark: our ICNN/JCBB vs MRPT on identical scenes"};
-  int scenes = 40;
-  std::uint64_t seed = 1;
-  bool quick = false;
-  bool kdtree = true;
-  double confidence = 0.99;
-  double mrpt_cell_cap_s = 20.0;
-  std::string csv;
-  std::vector<int> dense_m{6, 8, 10};
-  bool dense_only = false;
-  app.add_option("--scenes", scenes, "scenes per cell")->check(CLI::PositiveNumber);
-  app.add_option("--seed", seed, "first scene seed (scene k of a cell uses seed + k)");
-  app.add_option("--confidence", confidence, "chi-square level of the individual and joint tests")
-      ->check(CLI::Range(0.5, 0.9999));
-  app.add_flag("--quick", quick, "only the M = 5, 10 cells (a smoke run)");
-  app.add_option("--mrpt-kdtree", kdtree, "MRPT's kd-tree prefilter of individual compatibility (its default: on)");
-  app.add_option("--mrpt-cell-cap-s", mrpt_cell_cap_s,
-                 "stop calling MRPT-JCBB in a cell once its calls there have taken this many seconds");
-  app.add_option("--dense-m", dense_m, "observations per scan in the dense-map cells");
-  app.add_flag("--dense-only", dense_only, "only the dense-map cells");
-  app.add_option("--csv", csv, "also write the table as CSV to this file");
-  CLI11_PARSE(app, argc, argv);
+int run_mrpt_suite(const BenchOptions& o) {
+  const int scenes = o.scenes;
+  const std::uint64_t seed = o.seed;
+  const bool quick = o.quick;
+  [[maybe_unused]] const bool kdtree = o.mrpt_kdtree;
+  const double confidence = o.confidence;
+  [[maybe_unused]] const double mrpt_cell_cap_s = o.mrpt_cell_cap_s;
+  const std::string csv = o.out_dir.empty() ? std::string() : o.out_dir + "/mrpt.csv";
+  const std::vector<int>& dense_m = o.dense_m;
+  const bool dense_only = o.dense_only;
 
   std::vector<Cell> cells;
   for (int n : {20, 50, 100}) {
@@ -121,7 +97,7 @@ int main(int argc, char** argv) {
   ours->jcbb.search = SearchMethod::kJcbb;
   IncrementalJoint<double, B::kMaxObservations> joint;
 
-  std::printf("# geojcbb association benchmark\n\n");
+  std::printf("# Side by side with MRPT\n\n");
   std::printf("scenes per cell: %d, seed %llu, chi2 level %.4g, 20%% clutter, one R for all observations, "
               "bearings within +-%.0f deg (no innovation wraps, so MRPT's unwrapped innovations are exact)\n",
               scenes, static_cast<unsigned long long>(seed), confidence, 2.6 * 180 / kPi<double>);
@@ -185,7 +161,7 @@ int main(int argc, char** argv) {
             return 2;
           }
           const auto t1 = Clock::now();
-          st[method].us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+          st[method].us.push_back(elapsed_us(t0, t1));
           for (std::size_t i = 0; i < hyp.size(); ++i) hyp[i] = ours->out.candidate[i];
           nodes = ours->out.diag.jcbb_nodes;
         } else {
@@ -196,7 +172,7 @@ int main(int argc, char** argv) {
               Z, Y, YC, res, method == kMrptNn ? mrpt::slam::assocNN : mrpt::slam::assocJCBB,
               mrpt::slam::metricMaha, confidence, kdtree);
           const auto t1 = Clock::now();
-          const double us = std::chrono::duration<double, std::micro>(t1 - t0).count();
+          const double us = elapsed_us(t0, t1);
           st[method].us.push_back(us);
           if (method == kMrptJcbb) mrpt_jcbb_total_s += us * 1e-6;
           for (const auto& [i, j] : res.associations) hyp[i] = static_cast<int>(j);
@@ -246,3 +222,5 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace geojcbb::bench
