@@ -27,4 +27,12 @@ class AllocationGuard {
   std::uint64_t malloc0_;
 };
 
+/// Allocations made while f() runs.
+template <class F>
+std::uint64_t allocations_during(F&& f) {
+  AllocationGuard guard;
+  f();
+  return guard.allocations();
+}
+
 }  // namespace geojcbb::test

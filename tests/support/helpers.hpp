@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include "geojcbb/associate.hpp"
+#include "geojcbb_host/scene.hpp"
 
 namespace geojcbb::test {
 
@@ -37,6 +38,14 @@ struct Problem {
 template <typename T, class B>
 std::unique_ptr<Problem<T, B>> make_problem() {
   return std::make_unique<Problem<T, B>>();
+}
+
+/// A generated scene loaded into a Problem's inputs (the scene must fit the bounds).
+template <typename T, class B>
+std::unique_ptr<Problem<T, B>> scene_problem(const host::SceneParams& params, std::uint64_t seed) {
+  auto p = make_problem<T, B>();
+  REQUIRE(host::to_inputs(host::make_scene(params, seed), p->obs, p->pred));
+  return p;
 }
 
 }  // namespace geojcbb::test

@@ -26,6 +26,19 @@ host::SceneParams random_scene(std::mt19937_64& rng) {
   return p;
 }
 
+// Dense scenes with a large heading error, which moves every group the same way: groups searched
+// apart can each pass alone and fail together.
+host::SceneParams heading_error_scene() {
+  host::SceneParams sp;
+  sp.observations = 20;
+  sp.landmarks = 30;
+  sp.max_range_m = 8;
+  sp.sigma_pose_xy_m = 0.1;
+  sp.sigma_pose_theta_rad = 0.08;
+  sp.sigma_landmark_m = 0.05;
+  return sp;
+}
+
 template <typename T, class B>
 AssociationConfig<T, B> strategy(Strategy s, bool recheck = true) {
   StrategyParams<T> p;
@@ -140,16 +153,7 @@ TEST_CASE_TEMPLATE("the re-check repairs unions that fail the joint test", T, fl
   std::mt19937_64 rng(80);
   int failing_without = 0, repaired = 0;
   for (int k = 0; k < 200; ++k) {
-    host::SceneParams sp;
-    sp.observations = 20;
-    sp.landmarks = 30;
-    sp.max_range_m = 8;
-    sp.sigma_pose_xy_m = 0.1;
-    sp.sigma_pose_theta_rad = 0.08;  // a heading error moves every group the same way
-    sp.sigma_landmark_m = 0.05;
-    const host::Scene scene = host::make_scene(sp, rng());
-    auto p = make_problem<T, B>();
-    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    auto p = scene_problem<T, B>(heading_error_scene(), rng());
     for (Strategy s : {Strategy::kKjcbb, Strategy::kGemjcbb, Strategy::kGeojcbb}) {
       auto off = strategy<T, B>(s, false);
       off.groups = 5;
@@ -172,16 +176,7 @@ TEST_CASE_TEMPLATE("conditioned groups: the union is jointly compatible by const
   using B = DefaultBounds;
   std::mt19937_64 rng(81);
   for (int k = 0; k < 200; ++k) {
-    host::SceneParams sp;
-    sp.observations = 20;
-    sp.landmarks = 30;
-    sp.max_range_m = 8;
-    sp.sigma_pose_xy_m = 0.1;
-    sp.sigma_pose_theta_rad = 0.08;
-    sp.sigma_landmark_m = 0.05;
-    const host::Scene scene = host::make_scene(sp, rng());
-    auto p = make_problem<T, B>();
-    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    auto p = scene_problem<T, B>(heading_error_scene(), rng());
     for (Strategy s : {Strategy::kKjcbb, Strategy::kDfjcbb, Strategy::kGemjcbb, Strategy::kGeojcbb}) {
       auto cfg = strategy<T, B>(s, false);  // no re-check: nothing repairs the union afterwards
       cfg.condition_groups = true;
