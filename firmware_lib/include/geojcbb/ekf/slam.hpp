@@ -1,0 +1,311 @@
+// ekf: fixed-capacity EKF-SLAM with a dense covariance.
+//   state  x = [x_r, y_r, theta_r, l1x, l1y, l2x, l2y, ...]   (Layout: named blocks)
+//   predict:        x_r <- f(x_r, u),  P_rr <- F P_rr F^T + G Q G^T,  P_rl <- F P_rl          O(n)
+//   predict_local:  candidates within r + d (eq. 5), their h_j and C = H P H^T (all cross terms) O(n^2)
+//   update:         one batch update with the associated pairs: S = H P H^T + R = L L^T,
+//                   W = P H^T L^-T, x <- x + W L^-1 nu, P <- P - W W^T (then symmetrised)  O(n^2 p)
+//   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
+// No heap: P is a fixed array of capacity (3 + 2 MaxLandmarks)^2, used in its top-left dim x dim
+// corner. Every call validates first and changes no state unless it returns kOk.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "geojcbb/core/association_types.hpp"
+#include "geojcbb/ekf/motion.hpp"
+#include "geojcbb/gate/compatibility.hpp"
+
+namespace geojcbb::ekf {
+
+/// The state layout as named constant blocks.
+struct Layout {
+  static constexpr int kPose = 0;      ///< x, y, theta
+  static constexpr int kPoseSize = 3;
+  static constexpr int landmark(int j) { return kPoseSize + 2 * j; }  ///< first row of landmark j
+};
+
+/// Caller-owned scratch of predict_local() and update(); typically a static object on the device.
+template <typename T, class B>
+struct Workspace {
+  static constexpr int kRows = Layout::landmark(B::kMaxLandmarks);
+  static constexpr int kCols = 2 * B::kMaxObservations;
+  std::array<T, static_cast<std::size_t>(kRows) * kCols> W;   ///< P H^T, then P H^T L^-T (row-major)
+  std::array<T, static_cast<std::size_t>(kCols) * kCols> L;   ///< Cholesky factor of S (row-major)
+  std::array<T, kCols> nu;                                     ///< stacked innovations, then L^-1 nu
+  std::array<std::int16_t, B::kMaxObservations> obs;           ///< pair -> observation
+  std::array<std::int16_t, B::kMaxObservations> lm;            ///< pair -> landmark
+  std::array<Mat23<T>, B::kMaxObservations> Hp;                ///< pair -> dh/dpose
+  std::array<Mat2<T>, B::kMaxObservations> Hl;                 ///< pair -> dh/dlandmark
+  std::array<std::int16_t, B::kMaxCandidates> cand;            ///< local map: candidate -> landmark
+  std::array<T, B::kMaxCandidates> cand_range;                 ///< local map: predicted range [m]
+  std::array<Mat23<T>, B::kMaxCandidates> cand_Hp;             ///< local map: dh/dpose
+  std::array<Mat2<T>, B::kMaxCandidates> cand_Hl;              ///< local map: dh/dlandmark
+};
+
+struct LocalMapStats {
+  int in_region = 0;       ///< landmarks within the radius
+  bool truncated = false;  ///< more than MaxCandidates were: the nearest were kept
+};
+
+template <typename T, class B>
+class Slam {
+ public:
+  static constexpr int kMaxState = Layout::landmark(B::kMaxLandmarks);
+
+  /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
+  /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
+  [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) {
+    if (!std::isfinite(x0.x) || !std::isfinite(x0.y) || !std::isfinite(x0.theta) || !P0.allFinite()) {
+      return Status::kNonFinite;
+    }
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < r; ++c)
+        if (!nearly_equal(P0(r, c), P0(c, r))) return Status::kNotSymmetric;
+    const T m1 = P0(0, 0), m2 = P0(0, 0) * P0(1, 1) - P0(0, 1) * P0(1, 0);
+    if (!(m1 > T(0) && m2 > T(0) && P0.determinant() > T(0))) return Status::kNotPositiveDefinite;
+    n_ = 0;
+    x_[0] = x0.x;
+    x_[1] = x0.y;
+    x_[2] = wrap_angle(x0.theta);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) P(r, c) = P0(r, c);
+    return Status::kOk;
+  }
+
+  int landmarks() const { return n_; }
+  int dim() const { return Layout::landmark(n_); }
+  Pose2<T> pose() const { return {x_[0], x_[1], x_[2]}; }
+  Vec2<T> landmark(int j) const { return Vec2<T>(x_[Layout::landmark(j)], x_[Layout::landmark(j) + 1]); }
+  T x(int i) const { return x_[i]; }
+  T cov(int r, int c) const { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
+
+  /// Moves the robot by one odometry interval.
+  /// @return kOk; kNonFinite; kInvalidInput for dt < 0 or a negative standard deviation.
+  [[nodiscard]] Status predict(const Odometry<T>& u) {
+    if (!std::isfinite(u.v_mps) || !std::isfinite(u.w_radps) || !std::isfinite(u.dt_s) ||
+        !std::isfinite(u.sigma_v_mps) || !std::isfinite(u.sigma_w_radps)) {
+      return Status::kNonFinite;
+    }
+    if (u.dt_s < T(0) || u.sigma_v_mps < T(0) || u.sigma_w_radps < T(0)) return Status::kInvalidInput;
+    Mat3<T> F;
+    Mat32<T> G;
+    const Pose2<T> next = move(pose(), u, &F, &G);
+    const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
+    const Mat3<T> Prr = F * block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
+    set_block<3, 3>(0, 0, T(0.5) * (Prr + Prr.transpose()));
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+      const int l = Layout::landmark(j);
+      const Mat32<T> Prl = F * block<3, 2>(0, l);
+      set_block<3, 2>(0, l, Prl);
+      set_block<2, 3>(l, 0, Prl.transpose());
+    }
+    x_[0] = next.x;
+    x_[1] = next.y;
+    x_[2] = next.theta;
+    return Status::kOk;
+  }
+
+  /// The association input for the current scan: the landmarks with predicted range < radius_m
+  /// (r + d, eq. 5), nearest first and at most MaxCandidates, with ids = landmark indices, their
+  /// predicted measurements h and C = H P H^T.
+  /// @return kOk; kInvalidInput for a radius that is not positive and finite.
+  [[nodiscard]] Status predict_local(T radius_m, Workspace<T, B>& ws, Prediction<T, B>& out,
+                                     LocalMapStats& stats) const {
+    if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
+    auto& idx = ws.cand;
+    auto& rng = ws.cand_range;
+    auto& Hp = ws.cand_Hp;
+    auto& Hl = ws.cand_Hl;
+    int n = 0;
+    stats = LocalMapStats{};
+    const Pose2<T> xr = pose();
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks; insertion keeps the nearest kMaxCandidates
+      const T r = (landmark(j) - Vec2<T>(xr.x, xr.y)).norm();
+      if (!(r < radius_m) || !(r > T(0))) continue;
+      ++stats.in_region;
+      int k = n;
+      if (n < B::kMaxCandidates) {
+        ++n;
+      } else {
+        stats.truncated = true;
+        if (!(r < rng[n - 1])) continue;  // farther than every kept candidate
+        k = n - 1;                         // the farthest kept candidate makes room
+      }
+      for (; k > 0 && rng[k - 1] > r; --k) {  // <= kMaxCandidates
+        rng[k] = rng[k - 1];
+        idx[k] = idx[k - 1];
+      }
+      rng[k] = r;
+      idx[k] = static_cast<std::int16_t>(j);
+    }
+    out.count = n;
+    out.C.resize(2 * n, 2 * n);
+    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
+      out.id[a] = idx[a];
+      out.h[a] = observe(xr, landmark(idx[a]), &Hp[a], &Hl[a]);
+    }
+    const Mat3<T> Prr = block<3, 3>(0, 0);
+    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
+      const int la = Layout::landmark(idx[a]);
+      // Row a of H P: the 2 x 3 pose part and, per b, the 2 x 2 landmark part.
+      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * block<2, 3>(la, 0);
+      for (int b = 0; b <= a; ++b) {  // <= kMaxCandidates
+        const int lb = Layout::landmark(idx[b]);
+        const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
+        const Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
+        out.C.template block<2, 2>(2 * a, 2 * b) = Cab;
+        out.C.template block<2, 2>(2 * b, 2 * a) = Cab.transpose();
+      }
+    }
+    return Status::kOk;
+  }
+
+  /// One batch update with every paired observation of `assoc` (feature ids are landmark indices).
+  /// @return kOk (also with no pairs); kInvalidInput for a count mismatch or an unknown landmark;
+  ///         kNonFinite / kNotPositiveDefinite for bad observations or an S that is not positive
+  ///         definite. No state changes unless kOk.
+  [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc,
+                              Workspace<T, B>& ws) {
+    if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
+      return Status::kInvalidInput;
+    }
+    int p = 0;
+    const Pose2<T> xr = pose();
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const FeatureId f = assoc.feature[i];
+      if (f < 0) continue;
+      if (f >= n_) return Status::kInvalidInput;
+      if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
+      if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
+      const Vec2<T> h = observe(xr, landmark(f), &ws.Hp[p], &ws.Hl[p]);
+      const Vec2<T> nu = innovation(obs.z[i], h);
+      ws.nu[2 * p] = nu.x();
+      ws.nu[2 * p + 1] = nu.y();
+      ws.obs[p] = static_cast<std::int16_t>(i);
+      ws.lm[p] = static_cast<std::int16_t>(f);
+      ++p;
+    }
+    if (p == 0) return Status::kOk;
+    const int n = dim();
+    const int m = 2 * p;
+    auto W = [&](int r, int c) -> T& { return ws.W[static_cast<std::size_t>(r) * m + c]; };
+    auto L = [&](int r, int c) -> T& { return ws.L[static_cast<std::size_t>(r) * m + c]; };
+    // P H^T, two columns per pair.  O(n p)
+    for (int r = 0; r < n; ++r) {  // <= kMaxState
+      for (int k = 0; k < p; ++k) {  // <= kMaxObservations
+        const int l = Layout::landmark(ws.lm[k]);
+        for (int u = 0; u < 2; ++u) {
+          T s = T(0);
+          for (int t = 0; t < 3; ++t) s += cov(r, t) * ws.Hp[k](u, t);
+          for (int t = 0; t < 2; ++t) s += cov(r, l + t) * ws.Hl[k](u, t);
+          W(r, 2 * k + u) = s;
+        }
+      }
+    }
+    // S = H (P H^T) + R, lower triangle, then its Cholesky factor.  O(p^2), O(p^3)
+    for (int a = 0; a < p; ++a) {  // <= kMaxObservations
+      const int la = Layout::landmark(ws.lm[a]);
+      for (int u = 0; u < 2; ++u) {
+        const int row = 2 * a + u;
+        for (int col = 0; col <= row; ++col) {  // <= 2 kMaxObservations
+          T s = T(0);
+          for (int t = 0; t < 3; ++t) s += ws.Hp[a](u, t) * W(t, col);
+          for (int t = 0; t < 2; ++t) s += ws.Hl[a](u, t) * W(la + t, col);
+          if (col / 2 == a) s += obs.R[ws.obs[a]](u, col % 2);
+          L(row, col) = s;
+        }
+      }
+    }
+    for (int j = 0; j < m; ++j) {  // <= 2 kMaxObservations: in-place Cholesky
+      T d = L(j, j);
+      for (int t = 0; t < j; ++t) d -= L(j, t) * L(j, t);
+      if (!(d > T(0))) return Status::kNotPositiveDefinite;
+      L(j, j) = std::sqrt(d);
+      for (int i = j + 1; i < m; ++i) {  // <= 2 kMaxObservations
+        T s = L(i, j);
+        for (int t = 0; t < j; ++t) s -= L(i, t) * L(j, t);
+        L(i, j) = s / L(j, j);
+      }
+    }
+    // Nothing below can fail: the state changes from here on.
+    auto forward = [&](auto&& v) {  // v <- L^-1 v, v indexed 0 .. m-1
+      for (int i = 0; i < m; ++i) {  // <= 2 kMaxObservations
+        T s = v(i);
+        for (int t = 0; t < i; ++t) s -= L(i, t) * v(t);
+        v(i) = s / L(i, i);
+      }
+    };
+    forward([&](int i) -> T& { return ws.nu[i]; });
+    for (int r = 0; r < n; ++r) forward([&](int i) -> T& { return W(r, i); });  // W <- P H^T L^-T
+    for (int r = 0; r < n; ++r) {  // x <- x + W (L^-1 nu)
+      T s = T(0);
+      for (int k = 0; k < m; ++k) s += W(r, k) * ws.nu[k];
+      x_[r] += s;
+    }
+    x_[2] = wrap_angle(x_[2]);
+    for (int r = 0; r < n; ++r) {  // P <- P - W W^T, symmetric by construction  O(n^2 p)
+      for (int c = 0; c <= r; ++c) {
+        T s = T(0);
+        for (int k = 0; k < m; ++k) s += W(r, k) * W(c, k);
+        const T v = T(0.5) * (P(r, c) + P(c, r)) - s;
+        P(r, c) = v;
+        P(c, r) = v;
+      }
+    }
+    return Status::kOk;
+  }
+
+  /// Adds a landmark observed at z = (range, bearing) with noise R from the current pose.
+  /// @param[out] id  the new landmark's index (stable for the map's life)
+  /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped; kNonFinite; kInvalidInput for a
+  ///         negative range; kNotPositiveDefinite for R. No state changes unless kOk.
+  [[nodiscard]] Status augment(const Vec2<T>& z, const Mat2<T>& R, FeatureId& id) {
+    if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
+    if (z.x() < T(0)) return Status::kInvalidInput;
+    if (!is_spd(R)) return Status::kNotPositiveDefinite;
+    if (n_ >= B::kMaxLandmarks) return Status::kCapacityExceeded;
+    Mat23<T> Jp;
+    Mat2<T> Jz;
+    const Vec2<T> l = inverse_observe(pose(), z, &Jp, &Jz);
+    const int n = dim();
+    const int k = n;  // first row of the new landmark
+    for (int c = 0; c < n; ++c) {  // <= kMaxState: P_lx = Jp P_rx
+      for (int u = 0; u < 2; ++u) {
+        T s = T(0);
+        for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
+        P(k + u, c) = s;
+        P(c, k + u) = s;
+      }
+    }
+    const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
+    set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
+    x_[k] = l.x();
+    x_[k + 1] = l.y();
+    id = n_;
+    ++n_;
+    return Status::kOk;
+  }
+
+ private:
+  T& P(int r, int c) { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
+  T P(int r, int c) const { return cov(r, c); }
+  template <int R, int C>
+  Eigen::Matrix<T, R, C> block(int r0, int c0) const {
+    Eigen::Matrix<T, R, C> b;
+    for (int r = 0; r < R; ++r)
+      for (int c = 0; c < C; ++c) b(r, c) = cov(r0 + r, c0 + c);
+    return b;
+  }
+  template <int R, int C>
+  void set_block(int r0, int c0, const Eigen::Matrix<T, R, C>& b) {
+    for (int r = 0; r < R; ++r)
+      for (int c = 0; c < C; ++c) P(r0 + r, c0 + c) = b(r, c);
+  }
+
+  std::array<T, kMaxState> x_{};
+  std::array<T, static_cast<std::size_t>(kMaxState) * kMaxState> p_{};
+  int n_ = 0;
+};
+
+}  // namespace geojcbb::ekf

@@ -1,0 +1,257 @@
+// EKF-SLAM: motion Jacobians against finite differences; predict_local's C against an explicit dense
+// H P H^T; a noise-free run stays on the truth; NEES within its 95 % bounds over a seeded Monte Carlo
+// run; bad input and capacity change no state; no allocation.
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "geojcbb/core/chi_square.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "support/alloc_counter.hpp"
+#include "support/helpers.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::ekf;
+using namespace geojcbb::test;
+
+namespace {
+using EB = Bounds<16, 24, 5, 1000, 40>;
+
+template <typename T>
+struct Fixture {
+  Slam<T, EB> slam;
+  ekf::Workspace<T, EB> ws;
+  Observations<T, EB> obs;
+  Association<T, EB> assoc;
+  Prediction<T, EB> pred;
+};
+
+// A ring of landmarks, and a robot driving a circle inside it.
+std::vector<Eigen::Vector2d> ring(int n, double radius) {
+  std::vector<Eigen::Vector2d> l;
+  for (int k = 0; k < n; ++k) {
+    const double a = 2 * kPi<double> * k / n;
+    l.emplace_back(radius * std::cos(a), radius * std::sin(a));
+  }
+  return l;
+}
+
+struct RunResult {
+  double pose_nees = 0;   ///< at the last step
+  double max_pose_error = 0;
+  bool ok = true;
+};
+
+// Drives `steps` odometry intervals; every step observes the landmarks within 7 m and +-90 deg,
+// associates by ground truth, updates, and augments the first sightings.
+template <typename T>
+RunResult run(Fixture<T>& f, const std::vector<Eigen::Vector2d>& world, int steps, double noise_scale,
+              std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  const double sv = 0.05, sw = 0.02, sr = 0.05, sb = 0.01;
+  Pose2<double> truth{0, -4, 0};
+  REQUIRE(f.slam.reset(Pose2<T>{T(truth.x), T(truth.y), T(truth.theta)}, Mat3<T>::Identity() * T(1e-9)) ==
+          Status::kOk);
+  std::vector<int> id_of(world.size(), -1);
+  RunResult res;
+  for (int k = 0; k < steps; ++k) {
+    Odometry<double> u{1.0, 0.25, 0.1, sv, sw};
+    truth = move(truth, u);
+    Odometry<T> un{T(u.v_mps + noise_scale * sv * g(rng)), T(u.w_radps + noise_scale * sw * g(rng)), T(u.dt_s),
+                   T(sv), T(sw)};
+    REQUIRE(f.slam.predict(un) == Status::kOk);
+    f.obs.clear();
+    std::vector<int> seen;
+    for (std::size_t j = 0; j < world.size(); ++j) {
+      Vec2<double> z = observe(truth, Vec2<double>(world[j]));
+      if (z.x() > 7 || std::abs(z.y()) > kPi<double> / 2 || f.obs.count == EB::kMaxObservations) continue;
+      z += Vec2<double>(noise_scale * sr * g(rng), noise_scale * sb * g(rng));
+      REQUIRE(f.obs.push(z.cast<T>(), Mat2<T>(Vec2<T>(T(sr * sr), T(sb * sb)).asDiagonal())) == Status::kOk);
+      seen.push_back(static_cast<int>(j));
+    }
+    f.assoc.count = f.obs.count;
+    for (int i = 0; i < f.obs.count; ++i) f.assoc.feature[i] = id_of[seen[i]] >= 0 ? id_of[seen[i]] : kNewFeature;
+    REQUIRE(f.slam.update(f.obs, f.assoc, f.ws) == Status::kOk);
+    for (int i = 0; i < f.obs.count; ++i) {
+      if (f.assoc.feature[i] != kNewFeature) continue;
+      FeatureId id = -1;
+      REQUIRE(f.slam.augment(f.obs.z[i], f.obs.R[i], id) == Status::kOk);
+      id_of[seen[i]] = id;
+    }
+    const Pose2<T> e = f.slam.pose();
+    const Eigen::Vector3d err(static_cast<double>(e.x) - truth.x, static_cast<double>(e.y) - truth.y,
+                              wrap_angle(static_cast<double>(e.theta) - truth.theta));
+    res.max_pose_error = std::max(res.max_pose_error, err.head<2>().norm());
+    Eigen::Matrix3d P;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) P(r, c) = static_cast<double>(f.slam.cov(r, c));
+    res.pose_nees = err.dot(P.ldlt().solve(err));
+  }
+  return res;
+}
+}  // namespace
+
+TEST_CASE("motion model: Jacobians equal central finite differences") {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-2, 2);
+  const double h = 1e-6;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Pose2<double> x{u(rng), u(rng), wrap_angle(u(rng))};
+    const Odometry<double> od{u(rng), u(rng), 0.05 + std::abs(u(rng)) * 0.1, 0.1, 0.1};
+    Mat3<double> Jx;
+    Mat32<double> Ju;
+    move(x, od, &Jx, &Ju);
+    auto diff = [&](const Pose2<double>& a, const Pose2<double>& b) {
+      return Vec3<double>((a.x - b.x) / (2 * h), (a.y - b.y) / (2 * h), wrap_angle(a.theta - b.theta) / (2 * h));
+    };
+    for (int k = 0; k < 3; ++k) {
+      Pose2<double> a = x, b = x;
+      (k == 0 ? a.x : k == 1 ? a.y : a.theta) += h;
+      (k == 0 ? b.x : k == 1 ? b.y : b.theta) -= h;
+      CHECK((diff(move(a, od), move(b, od)) - Jx.col(k)).norm() < 1e-6);
+    }
+    for (int k = 0; k < 2; ++k) {
+      Odometry<double> a = od, b = od;
+      (k == 0 ? a.v_mps : a.w_radps) += h;
+      (k == 0 ? b.v_mps : b.w_radps) -= h;
+      CHECK((diff(move(x, a), move(x, b)) - Ju.col(k)).norm() < 1e-6);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("predict_local: C equals an explicit dense H P H^T; the region keeps the nearest", T, float,
+                   double) {
+  auto f = std::make_unique<Fixture<T>>();
+  const auto world = ring(30, 6.0);
+  run(*f, world, 40, 1.0, 3);
+  LocalMapStats st;
+  REQUIRE(f->slam.predict_local(T(100), f->ws, f->pred, st) == Status::kOk);
+  const int n = f->pred.count;
+  REQUIRE(n == std::min(f->slam.landmarks(), EB::kMaxCandidates));
+  CHECK(st.truncated == (f->slam.landmarks() > EB::kMaxCandidates));
+  const int d = f->slam.dim();
+  Eigen::MatrixXd P(d, d), H = Eigen::MatrixXd::Zero(2 * n, d);
+  for (int r = 0; r < d; ++r)
+    for (int c = 0; c < d; ++c) P(r, c) = static_cast<double>(f->slam.cov(r, c));
+  const Pose2<T> x = f->slam.pose();
+  const Pose2<double> xd{double(x.x), double(x.y), double(x.theta)};
+  double prev = 0;
+  for (int a = 0; a < n; ++a) {
+    Mat23<double> Jp;
+    Mat2<double> Jl;
+    const Vec2<double> h = observe(xd, Vec2<double>(f->slam.landmark(f->pred.id[a]).template cast<double>()), &Jp, &Jl);
+    CHECK(h.x() >= prev);  // nearest first
+    prev = h.x();
+    H.block<2, 3>(2 * a, 0) = Jp;
+    H.block<2, 2>(2 * a, Layout::landmark(f->pred.id[a])) = Jl;
+    CHECK((f->pred.h[a].template cast<double>() - h).norm() < 1e-4);
+  }
+  const Eigen::MatrixXd C = H * P * H.transpose();
+  const double tol = std::is_same<T, float>::value ? 1e-4 : 1e-10;
+  CHECK((f->pred.C.template cast<double>() - C).norm() <= tol * (1 + C.norm()));
+  REQUIRE(f->slam.predict_local(T(3), f->ws, f->pred, st) == Status::kOk);
+  for (int a = 0; a < f->pred.count; ++a) CHECK(f->pred.h[a].x() < T(3));
+}
+
+TEST_CASE_TEMPLATE("a noise-free run stays on the truth; P stays symmetric", T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  const RunResult r = run(*f, ring(24, 6.0), 260, 0.0, 1);  // more than one lap: loop closure
+  CHECK(r.max_pose_error < (std::is_same<T, float>::value ? 1e-3 : 1e-9));
+  const int d = f->slam.dim();
+  for (int i = 0; i < d; ++i) {
+    CHECK(f->slam.cov(i, i) > T(0));
+    for (int j = 0; j < i; ++j) CHECK(f->slam.cov(i, j) == f->slam.cov(j, i));
+  }
+}
+
+// Diagnostic (skipped; run with --no-skip -tc="probe*"): EKF-SLAM's known inconsistency grows with
+// time (heading information gained through Jacobians at estimates). Measured, 200 runs each:
+// 5 steps 3.10, 20 steps 2.97, 80 steps 3.14, 160 steps 3.30 (3 is consistent).
+TEST_CASE("probe: NEES against run length" * doctest::skip(true)) {
+  for (int steps : {5, 10, 20, 40, 80, 160}) {
+    double sum = 0;
+    for (int k = 0; k < 200; ++k) {
+      auto f = std::make_unique<Fixture<double>>();
+      sum += run(*f, ring(24, 6.0), steps, 1.0, 100 + k).pose_nees;
+    }
+    MESSAGE("steps " << steps << ": mean pose NEES " << sum / 200);
+  }
+}
+
+TEST_CASE("NEES of the pose over a seeded Monte Carlo run lies within its 95 % bounds") {
+  // 200 runs of 80 steps with true association: the NEES at the last step averaged over runs, whose
+  // sum is chi-square with 3 x 200 degrees of freedom for a consistent filter.
+  constexpr int kRuns = 200;
+  double sum = 0;
+  for (int k = 0; k < kRuns; ++k) {
+    auto f = std::make_unique<Fixture<double>>();
+    sum += run(*f, ring(24, 6.0), 80, 1.0, 100 + k).pose_nees;
+  }
+  double lo = 0, hi = 0;
+  REQUIRE(chi2_inv(0.025, 3 * kRuns, lo) == Status::kOk);
+  REQUIRE(chi2_inv(0.975, 3 * kRuns, hi) == Status::kOk);
+  const double mean = sum / kRuns;
+  MESSAGE("mean pose NEES " << mean << ", 95 % bounds [" << lo / kRuns << ", " << hi / kRuns << "]");
+  CHECK(mean >= lo / kRuns);
+  CHECK(mean <= hi / kRuns);
+}
+
+TEST_CASE_TEMPLATE("bad input and a full map change no state", T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  run(*f, ring(24, 6.0), 30, 1.0, 9);
+  auto snapshot = std::make_unique<Slam<T, EB>>(f->slam);
+  auto same = [&] { return std::memcmp(snapshot.get(), &f->slam, sizeof(f->slam)) == 0; };
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  CHECK(f->slam.predict(Odometry<T>{nan, T(0), T(0.1), T(0.1), T(0.1)}) == Status::kNonFinite);
+  CHECK(f->slam.predict(Odometry<T>{T(1), T(0), T(-0.1), T(0.1), T(0.1)}) == Status::kInvalidInput);
+  FeatureId id = 99;
+  CHECK(f->slam.augment(Vec2<T>(nan, T(0)), Mat2<T>::Identity(), id) == Status::kNonFinite);
+  CHECK(f->slam.augment(Vec2<T>(T(1), T(0)), Mat2<T>::Zero(), id) == Status::kNotPositiveDefinite);
+  CHECK(id == 99);
+  f->obs.clear();
+  REQUIRE(f->obs.push(Vec2<T>(T(3), T(0.1)), Mat2<T>::Identity() * T(0.01)) == Status::kOk);
+  f->assoc.count = 1;
+  f->assoc.feature[0] = f->slam.landmarks();  // no such landmark
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kInvalidInput);
+  f->assoc.feature[0] = 0;
+  f->obs.R[0](0, 0) = -1;
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kNotPositiveDefinite);
+  f->assoc.count = 2;
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kInvalidInput);
+  CHECK(f->slam.predict_local(T(-1), f->ws, f->pred, *std::make_unique<LocalMapStats>()) == Status::kInvalidInput);
+  CHECK(same());
+  // Fill the map, then one more.
+  while (f->slam.landmarks() < EB::kMaxLandmarks) {
+    REQUIRE(f->slam.augment(Vec2<T>(T(2), T(0.3)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);
+  }
+  CHECK(id == EB::kMaxLandmarks - 1);
+  *snapshot = f->slam;
+  CHECK(f->slam.augment(Vec2<T>(T(2), T(0.3)), Mat2<T>::Identity() * T(0.01), id) == Status::kCapacityExceeded);
+  CHECK(same());
+}
+
+TEST_CASE_TEMPLATE("the filter allocates nothing", T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  run(*f, ring(24, 6.0), 20, 1.0, 4);
+  LocalMapStats st;
+  FeatureId id;
+  f->assoc.count = f->obs.count;
+  for (int i = 0; i < f->obs.count; ++i) f->assoc.feature[i] = i < f->slam.landmarks() ? i : kNewFeature;
+  Status s1, s2, s3, s4;
+  CHECK(allocations_during([&] {
+          s1 = f->slam.predict(Odometry<T>{T(1), T(0.1), T(0.1), T(0.05), T(0.02)});
+          s2 = f->slam.predict_local(T(8), f->ws, f->pred, st);
+          s3 = f->slam.update(f->obs, f->assoc, f->ws);
+          s4 = f->slam.augment(Vec2<T>(T(2), T(0.3)), Mat2<T>::Identity() * T(0.01), id);
+        }) == 0);
+  CHECK(s1 == Status::kOk);
+  CHECK(s2 == Status::kOk);
+  CHECK(s3 == Status::kOk);
+  CHECK(s4 == Status::kOk);
+}
