@@ -1,0 +1,72 @@
+// host_tools/sim: a 2D EKF-SLAM simulator in the spirit of Tim Bailey's (the papers' platform).
+// A robot follows a closed waypoint path counter-clockwise at constant speed; odometry reports
+// (v, w) with noise; a range-bearing laser sees landmarks within max range and field of view, each
+// with a detection probability, plus Poisson clutter. Every run is reproducible from its seed.
+// Scenarios are JSON files (host_tools/scenarios/*.json); see docs/simulator.md for the fields.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "geojcbb/core/range_bearing.hpp"
+
+namespace geojcbb::host {
+
+struct Scenario {
+  std::string name;
+  std::vector<Eigen::Vector2d> landmarks;  ///< true positions [m]
+  std::vector<Eigen::Vector2d> waypoints;  ///< closed path, driven in order [m]
+  int laps = 1;
+  double speed_mps = 3.0;           ///< commanded forward speed
+  double max_turn_rate_radps = 0.5; ///< steering saturation
+  double turn_gain = 2.0;           ///< w = gain * heading error (saturated)
+  double waypoint_radius_m = 1.0;   ///< switch to the next waypoint within this distance
+  double dt_s = 0.025;              ///< control interval
+  int observe_every = 8;            ///< a scan every this many control intervals (0.2 s)
+  double sigma_v_mps = 0.3;         ///< odometry noise (Bailey: speed 0.3 m/s)
+  double sigma_w_radps = 0.04;      ///< (Bailey: steering 3 deg on a 4 m wheelbase at 3 m/s)
+  double max_range_m = 30.0;
+  double fov_rad = 3.14159265358979;  ///< full field of view (centred ahead)
+  double sigma_range_m = 0.1;       ///< (Bailey: 0.1 m)
+  double sigma_bearing_rad = 0.01745329;  ///< (Bailey: 1 deg)
+  double detection_probability = 1.0;
+  double clutter_per_scan = 0.0;    ///< mean of a Poisson count per scan
+};
+
+/// Reads a scenario file. Throws std::runtime_error with the file and field on a bad file.
+Scenario load_scenario(const std::string& path);
+
+struct SimObservation {
+  Eigen::Vector2d z;  ///< (range [m], bearing [rad])
+  int truth;          ///< landmark index, or -1 for clutter
+};
+
+struct SimStep {
+  double t_s = 0;
+  Pose2<double> true_pose;
+  double v_mps = 0, w_radps = 0;  ///< noisy odometry over the interval that ended here
+  bool scan = false;              ///< a scan was taken at the end of this interval
+  std::vector<SimObservation> observations;
+};
+
+class Simulator {
+ public:
+  Simulator(const Scenario& s, std::uint64_t seed);
+  /// Advances one control interval; false once the path's laps are done.
+  bool step(SimStep& out);
+  const Scenario& scenario() const { return s_; }
+
+ private:
+  Scenario s_;
+  std::mt19937_64 rng_;
+  Pose2<double> x_;
+  std::size_t target_ = 1;
+  int lap_ = 0;
+  long k_ = 0;
+};
+
+}  // namespace geojcbb::host

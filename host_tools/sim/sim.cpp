@@ -1,0 +1,123 @@
+#include "geojcbb_host/sim.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "geojcbb/ekf/motion.hpp"
+
+namespace geojcbb::host {
+
+namespace {
+std::vector<Eigen::Vector2d> points(const nlohmann::json& a, const std::string& what) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : a) {
+    if (!p.is_array() || p.size() != 2) throw std::runtime_error(what + ": expected [x, y] pairs");
+    out.emplace_back(p[0].get<double>(), p[1].get<double>());
+  }
+  return out;
+}
+
+// Landmarks: an explicit list, or {"random": {"count", "min_x", "max_x", "min_y", "max_y",
+// "min_separation_m", "seed"}}.
+std::vector<Eigen::Vector2d> landmarks(const nlohmann::json& j) {
+  if (j.is_array()) return points(j, "landmarks");
+  const auto& r = j.at("random");
+  std::mt19937_64 rng(r.value("seed", 1ULL));
+  std::uniform_real_distribution<double> ux(r.at("min_x").get<double>(), r.at("max_x").get<double>());
+  std::uniform_real_distribution<double> uy(r.at("min_y").get<double>(), r.at("max_y").get<double>());
+  const int n = r.at("count").get<int>();
+  const double sep = r.value("min_separation_m", 0.0);
+  std::vector<Eigen::Vector2d> out;
+  for (int tries = 0; static_cast<int>(out.size()) < n && tries < 1000 * n; ++tries) {
+    const Eigen::Vector2d l(ux(rng), uy(rng));
+    if (std::all_of(out.begin(), out.end(), [&](const Eigen::Vector2d& o) { return (o - l).norm() >= sep; })) {
+      out.push_back(l);
+    }
+  }
+  return out;
+}
+}  // namespace
+
+Scenario load_scenario(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  Scenario s;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    s.name = j.value("name", path);
+    s.landmarks = landmarks(j.at("landmarks"));
+    s.waypoints = points(j.at("waypoints"), "waypoints");
+    if (s.waypoints.size() < 2) throw std::runtime_error("waypoints: need at least two");
+    s.laps = j.value("laps", s.laps);
+    s.speed_mps = j.value("speed_mps", s.speed_mps);
+    s.max_turn_rate_radps = j.value("max_turn_rate_radps", s.max_turn_rate_radps);
+    s.turn_gain = j.value("turn_gain", s.turn_gain);
+    s.waypoint_radius_m = j.value("waypoint_radius_m", s.waypoint_radius_m);
+    s.dt_s = j.value("dt_s", s.dt_s);
+    s.observe_every = j.value("observe_every", s.observe_every);
+    s.sigma_v_mps = j.value("sigma_v_mps", s.sigma_v_mps);
+    s.sigma_w_radps = j.value("sigma_w_radps", s.sigma_w_radps);
+    s.max_range_m = j.value("max_range_m", s.max_range_m);
+    s.fov_rad = j.value("fov_deg", s.fov_rad * 180 / kPi<double>) * kPi<double> / 180;
+    s.sigma_range_m = j.value("sigma_range_m", s.sigma_range_m);
+    s.sigma_bearing_rad = j.value("sigma_bearing_deg", s.sigma_bearing_rad * 180 / kPi<double>) * kPi<double> / 180;
+    s.detection_probability = j.value("detection_probability", s.detection_probability);
+    s.clutter_per_scan = j.value("clutter_per_scan", s.clutter_per_scan);
+  } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
+      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0) {
+    throw std::runtime_error(path + ": a parameter is out of range");
+  }
+  return s;
+}
+
+Simulator::Simulator(const Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) {
+  const Eigen::Vector2d d = s_.waypoints[1] - s_.waypoints[0];
+  x_ = {s_.waypoints[0].x(), s_.waypoints[0].y(), std::atan2(d.y(), d.x())};
+}
+
+bool Simulator::step(SimStep& out) {
+  if (lap_ >= s_.laps) return false;
+  std::normal_distribution<double> g(0, 1);
+  std::uniform_real_distribution<double> u(0, 1);
+  // Steer toward the current waypoint.
+  const Eigen::Vector2d to = s_.waypoints[target_] - Eigen::Vector2d(x_.x, x_.y);
+  const double err = wrap_angle(std::atan2(to.y(), to.x()) - x_.theta);
+  const double w = std::clamp(s_.turn_gain * err, -s_.max_turn_rate_radps, s_.max_turn_rate_radps);
+  x_ = ekf::move(x_, ekf::Odometry<double>{s_.speed_mps, w, s_.dt_s, 0, 0});
+  if ((s_.waypoints[target_] - Eigen::Vector2d(x_.x, x_.y)).norm() < s_.waypoint_radius_m) {
+    if (target_ == 0) ++lap_;  // back at the start: a lap is done
+    target_ = (target_ + 1) % s_.waypoints.size();
+  }
+  ++k_;
+  out.t_s = static_cast<double>(k_) * s_.dt_s;
+  out.true_pose = x_;
+  out.v_mps = s_.speed_mps + s_.sigma_v_mps * g(rng_);
+  out.w_radps = w + s_.sigma_w_radps * g(rng_);
+  out.scan = k_ % s_.observe_every == 0;
+  out.observations.clear();
+  if (!out.scan) return true;
+  for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
+    const Vec2<double> z = observe(x_, Vec2<double>(s_.landmarks[j]));
+    if (z.x() > s_.max_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
+    if (u(rng_) >= s_.detection_probability) continue;
+    out.observations.push_back({Eigen::Vector2d(z.x() + s_.sigma_range_m * g(rng_),
+                                                wrap_angle(z.y() + s_.sigma_bearing_rad * g(rng_))),
+                                static_cast<int>(j)});
+  }
+  std::poisson_distribution<int> clutter(s_.clutter_per_scan);
+  for (int c = clutter(rng_); c > 0; --c) {
+    const double r = s_.max_range_m * std::sqrt(u(rng_));
+    out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1});
+  }
+  std::shuffle(out.observations.begin(), out.observations.end(), rng_);
+  return true;
+}
+
+}  // namespace geojcbb::host
