@@ -67,11 +67,12 @@ Scenario load_scenario(const std::string& path) {
     s.sigma_bearing_rad = j.value("sigma_bearing_deg", s.sigma_bearing_rad * 180 / kPi<double>) * kPi<double> / 180;
     s.detection_probability = j.value("detection_probability", s.detection_probability);
     s.clutter_per_scan = j.value("clutter_per_scan", s.clutter_per_scan);
+    s.noise_scale = j.value("noise_scale", s.noise_scale);
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
   }
   if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
-      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0) {
+      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0) {
     throw std::runtime_error(path + ": a parameter is out of range");
   }
   return s;
@@ -98,8 +99,9 @@ bool Simulator::step(SimStep& out) {
   ++k_;
   out.t_s = static_cast<double>(k_) * s_.dt_s;
   out.true_pose = x_;
-  out.v_mps = s_.speed_mps + s_.sigma_v_mps * g(rng_);
-  out.w_radps = w + s_.sigma_w_radps * g(rng_);
+  const double k = s_.noise_scale;
+  out.v_mps = s_.speed_mps + k * s_.sigma_v_mps * g(rng_);
+  out.w_radps = w + k * s_.sigma_w_radps * g(rng_);
   out.scan = k_ % s_.observe_every == 0;
   out.observations.clear();
   if (!out.scan) return true;
@@ -107,8 +109,8 @@ bool Simulator::step(SimStep& out) {
     const Vec2<double> z = observe(x_, Vec2<double>(s_.landmarks[j]));
     if (z.x() > s_.max_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
     if (u(rng_) >= s_.detection_probability) continue;
-    out.observations.push_back({Eigen::Vector2d(z.x() + s_.sigma_range_m * g(rng_),
-                                                wrap_angle(z.y() + s_.sigma_bearing_rad * g(rng_))),
+    out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),
+                                                wrap_angle(z.y() + k * s_.sigma_bearing_rad * g(rng_))),
                                 static_cast<int>(j)});
   }
   std::poisson_distribution<int> clutter(s_.clutter_per_scan);

@@ -62,8 +62,12 @@ class Slam {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < r; ++c)
         if (!nearly_equal(P0(r, c), P0(c, r))) return Status::kNotSymmetric;
+    // Sylvester: every leading minor positive.
     const T m1 = P0(0, 0), m2 = P0(0, 0) * P0(1, 1) - P0(0, 1) * P0(1, 0);
-    if (!(m1 > T(0) && m2 > T(0) && P0.determinant() > T(0))) return Status::kNotPositiveDefinite;
+    const T m3 = P0(0, 0) * (P0(1, 1) * P0(2, 2) - P0(1, 2) * P0(2, 1)) -
+                 P0(0, 1) * (P0(1, 0) * P0(2, 2) - P0(1, 2) * P0(2, 0)) +
+                 P0(0, 2) * (P0(1, 0) * P0(2, 1) - P0(1, 1) * P0(2, 0));
+    if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
     n_ = 0;
     x_[0] = x0.x;
     x_[1] = x0.y;
@@ -153,7 +157,8 @@ class Slam {
       for (int b = 0; b <= a; ++b) {  // <= kMaxCandidates
         const int lb = Layout::landmark(idx[b]);
         const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
-        const Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
+        Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
+        if (a == b) Cab = (T(0.5) * (Cab + Cab.transpose())).eval();  // eval: the transpose aliases Cab
         out.C.template block<2, 2>(2 * a, 2 * b) = Cab;
         out.C.template block<2, 2>(2 * b, 2 * a) = Cab.transpose();
       }

@@ -35,6 +35,9 @@ struct Scenario {
   double sigma_bearing_rad = 0.01745329;  ///< (Bailey: 1 deg)
   double detection_probability = 1.0;
   double clutter_per_scan = 0.0;    ///< mean of a Poisson count per scan
+  /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas
+  /// above. 0 gives a noise-free run of a filter that still expects noise.
+  double noise_scale = 1.0;
 };
 
 /// Reads a scenario file. Throws std::runtime_error with the file and field on a bad file.

@@ -1,0 +1,58 @@
+// host_tools/eval: one EKF-SLAM run over a simulated scenario with a chosen association strategy,
+// scored against the simulator's ground truth with the papers' definitions (2019 paper, eqs. 15-19):
+//   TP  a pair whose map feature was initialised from the observation's true landmark
+//   FP  any other pair (wrong feature, or clutter paired)
+//   FN  an observation of a mapped landmark left unpaired
+//   TN  an observation correctly left unpaired: clutter, or a landmark not yet in the map
+// Every observation falls in exactly one class, so Total = TP + TN + FP + FN (eq. 15). (The
+// association benchmarks count recall against ground-truth pairs instead, where a wrong pair of a
+// mapped landmark is also a missed one.)
+// Augmentation rule: an observation with no compatible candidate (kNewFeature) becomes a landmark
+// only if its nearest d2 also exceeds a second, wider gate (chi2(0.999, 2) by default); between the
+// two gates it is too close to a mapped feature to be new and too far to pair, and is dropped.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "geojcbb/core/strategy.hpp"
+#include "geojcbb_host/scene.hpp"
+#include "geojcbb_host/sim.hpp"
+
+namespace geojcbb::host {
+
+struct RunOptions {
+  Strategy strategy = Strategy::kGeojcbb;
+  double confidence = 0.99;        ///< chi-square level of the individual and joint gates
+  double new_landmark_gate = 0.999;  ///< second gate for augmentation (chi-square level, 2 dof)
+  double compensation_m = 5.0;     ///< d in r + d (eq. 5); r is the scenario's max range
+  int groups = 3;                  ///< K for k-means / GMM-EM
+  bool condition_groups = false;
+  int max_steps = 0;               ///< stop after this many control intervals (0: the whole path)
+};
+
+struct StepRecord {
+  double t_s;
+  Pose2<double> truth, estimate;
+  double var_x, var_y;  ///< pose variances [m^2]
+  double pose_nees;     ///< (x, y, theta) NEES
+};
+
+struct RunResult {
+  Score score;
+  int scans = 0;
+  int observations = 0;           ///< scored observations (= TP + TN + FP + FN)
+  int landmarks = 0;              ///< mapped at the end
+  int spurious_landmarks = 0;     ///< mapped from clutter
+  int dropped_observations = 0;   ///< over the observation capacity in a scan
+  int budget_hits = 0;            ///< scans whose JCBB node budget ran out
+  double association_s = 0;       ///< total association time
+  double mean_abs_x_m = 0, mean_abs_y_m = 0;
+  std::vector<StepRecord> steps;  ///< one per scan
+};
+
+/// Runs one seed of one scenario. Throws std::runtime_error when the map capacity is exceeded or
+/// a library call fails (the message names the call and its status).
+RunResult run_slam(const Scenario& scenario, std::uint64_t seed, const RunOptions& options);
+
+}  // namespace geojcbb::host
