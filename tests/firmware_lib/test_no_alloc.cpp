@@ -11,14 +11,18 @@ using namespace geojcbb;
 using namespace geojcbb::test;
 
 namespace {
+host::SceneParams scene_params(int m, int n, double max_range_m) {
+  host::SceneParams sp;
+  sp.observations = m;
+  sp.landmarks = n;
+  sp.max_range_m = max_range_m;
+  return sp;
+}
+
 template <typename T, class B>
 void check_no_alloc(int m, int n) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    host::SceneParams sp;
-    sp.observations = m;
-    sp.landmarks = n;
-    sp.max_range_m = 6;
-    auto p = scene_problem<T, B>(sp, seed);
+    auto p = scene_problem<T, B>(scene_params(m, n, 6), seed);
     const Vec2<T> z0 = p->obs.z[0];
     for (int combo = 0; combo < 8; ++combo) {
       auto cfg = make_config<T, B>((combo & 4) ? SearchMethod::kIcnn : SearchMethod::kJcbb, combo & 1,
@@ -60,18 +64,14 @@ namespace {
 template <typename T, class B>
 void check_no_alloc_strategies(int m, int n) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    host::SceneParams sp;
-    sp.observations = m;
-    sp.landmarks = n;
-    sp.max_range_m = 8;
-    auto p = scene_problem<T, B>(sp, seed);
+    auto p = scene_problem<T, B>(scene_params(m, n, 8), seed);
     for (int s = 0; s < kStrategyCount; ++s) {
       for (int k : {0, 3}) {  // GMM-EM by BIC and fixed K
-        StrategyParams<T> sp2;
-        sp2.local_radius_m = T(6);
-        sp2.groups = k;
+        StrategyParams<T> sp;
+        sp.local_radius_m = T(6);
+        sp.groups = k;
         AssociationConfig<T, B> cfg;
-        REQUIRE(make_strategy(static_cast<Strategy>(s), sp2, cfg) == Status::kOk);
+        REQUIRE(make_strategy(static_cast<Strategy>(s), sp, cfg) == Status::kOk);
         Status st = Status::kNoConvergence;
         CHECK(allocations_during([&] { st = associate(p->obs, p->pred, cfg, p->ws, p->out); }) == 0);
         CHECK(st == Status::kOk);

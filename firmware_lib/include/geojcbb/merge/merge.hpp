@@ -26,7 +26,6 @@ using Hypothesis = std::int16_t;  // candidate index or -1
 
 struct MergeStats {
   std::uint16_t conflicts = 0;      ///< features claimed by more than one observation
-  std::uint16_t reassigned = 0;     ///< observations moved to another feature by a conflict
   bool recheck_failed = false;      ///< the union failed the joint test and was repaired
   std::uint16_t repair_dropped = 0; ///< pairings the repair removed
   std::uint32_t repair_nodes = 0;
@@ -37,7 +36,6 @@ template <typename T, class B>
 struct MergeWorkspace {
   CompatibilityTable<T, B> reduced;  ///< one candidate per observation, for the repair search
   std::array<Hypothesis, B::kMaxObservations> trial;
-  std::array<Hypothesis, B::kMaxObservations> best_trial;
   SearchOutcome<T, B> repair;
 };
 
@@ -100,7 +98,6 @@ template <typename T, class B>
       }
       if (claimants < 2) continue;
       ++st.conflicts;
-      st.reassigned = static_cast<std::uint16_t>(st.reassigned + claimants - 1);
       int keeper = nearest;
       if (cfg.optimal_criterion) {
         int best_pairs = -1;
