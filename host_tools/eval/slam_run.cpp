@@ -25,6 +25,8 @@ struct State {
   Association<double, EB> out;
 };
 
+constexpr int kRemoved = -2;  // feature_truth of a landmark id that has left the map
+
 void check(Status s, const char* what) {
   if (s != Status::kOk) throw std::runtime_error(std::string(what) + ": " + to_string(s));
 }
@@ -46,8 +48,12 @@ RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt
   SimStep step;
   RunResult res;
   res.observations = 0;
-  std::vector<int> feature_truth;                      // map feature -> landmark it came from (-1 clutter)
-  std::vector<bool> mapped(sc.landmarks.size(), false);  // landmark -> has a feature
+  std::vector<int> feature_truth;                 // landmark id -> true landmark it came from (-1 clutter)
+  std::vector<int> mapped(sc.landmarks.size(), 0);  // true landmark -> map landmarks made from it
+  ekf::Visibility<double> view;  // where a mapped landmark is expected: the sensor's view, shrunk
+  view.min_range_m = sc.min_range_m + opt.view_margin_m;
+  view.max_range_m = sc.max_range_m - opt.view_margin_m;
+  view.half_fov_rad = 0.5 * sc.fov_rad - 3 * sc.sigma_bearing_rad;
   {
     const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
     const Pose2<double> x0{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
@@ -83,7 +89,7 @@ RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt
     for (std::size_t i = 0; i < scan.size(); ++i) {
       const int t = scan[i].truth;
       const FeatureId f = st->out.feature[i];
-      const bool known = t >= 0 && mapped[t];
+      const bool known = t >= 0 && mapped[t] > 0;
       if (f >= 0) {
         ++((t >= 0 && feature_truth[f] == t) ? res.score.tp : res.score.fp);
       } else if (known) {
@@ -98,9 +104,23 @@ RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt
       FeatureId id = -1;
       check(st->slam.augment(st->obs.z[i], st->obs.R[i], id), "augment (map capacity)");
       feature_truth.push_back(scan[i].truth);
-      if (scan[i].truth >= 0) mapped[scan[i].truth] = true;
+      if (scan[i].truth >= 0) ++mapped[scan[i].truth];
       else ++res.spurious_landmarks;
     }
+    // Landmark bookkeeping: tentative landmarks missed too often leave the map.
+    ekf::ReviewStats rs;
+    check(st->slam.review(st->pred, st->out, view, opt.landmark_policy, rs), "review");
+    if (rs.removed > 0) {
+      std::vector<bool> alive(feature_truth.size(), false);
+      for (int j = 0; j < st->slam.landmarks(); ++j) alive[st->slam.id(j)] = true;
+      for (std::size_t id = 0; id < feature_truth.size(); ++id) {
+        if (alive[id] || feature_truth[id] == kRemoved) continue;
+        if (feature_truth[id] >= 0) --mapped[feature_truth[id]], ++res.removed_true_landmarks;
+        else ++res.removed_spurious_landmarks;
+        feature_truth[id] = kRemoved;
+      }
+    }
+
     StepRecord r;
     r.t_s = step.t_s;
     r.truth = step.true_pose;
@@ -122,6 +142,11 @@ RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt
     res.mean_abs_y_m /= res.scans;
   }
   res.landmarks = st->slam.landmarks();
+  for (int j = 0; j < res.landmarks; ++j) {
+    const int t = feature_truth[st->slam.id(j)];
+    res.map.push_back({st->slam.landmark(j).x(), st->slam.landmark(j).y(), t});
+    res.spurious_in_map += t < 0;
+  }
   return res;
 }
 

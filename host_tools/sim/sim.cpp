@@ -62,6 +62,7 @@ Scenario load_scenario(const std::string& path) {
     s.sigma_v_mps = j.value("sigma_v_mps", s.sigma_v_mps);
     s.sigma_w_radps = j.value("sigma_w_radps", s.sigma_w_radps);
     s.max_range_m = j.value("max_range_m", s.max_range_m);
+    s.min_range_m = j.value("min_range_m", s.min_range_m);
     s.fov_rad = j.value("fov_deg", s.fov_rad * 180 / kPi<double>) * kPi<double> / 180;
     s.sigma_range_m = j.value("sigma_range_m", s.sigma_range_m);
     s.sigma_bearing_rad = j.value("sigma_bearing_deg", s.sigma_bearing_rad * 180 / kPi<double>) * kPi<double> / 180;
@@ -72,6 +73,7 @@ Scenario load_scenario(const std::string& path) {
     throw std::runtime_error(path + ": " + e.what());
   }
   if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
+      !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) ||
       s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0) {
     throw std::runtime_error(path + ": a parameter is out of range");
   }
@@ -107,7 +109,7 @@ bool Simulator::step(SimStep& out) {
   if (!out.scan) return true;
   for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
     const Vec2<double> z = observe(x_, Vec2<double>(s_.landmarks[j]));
-    if (z.x() > s_.max_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
+    if (z.x() > s_.max_range_m || z.x() < s_.min_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
     if (u(rng_) >= s_.detection_probability) continue;
     out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),
                                                 wrap_angle(z.y() + k * s_.sigma_bearing_rad * g(rng_))),
@@ -115,7 +117,9 @@ bool Simulator::step(SimStep& out) {
   }
   std::poisson_distribution<int> clutter(s_.clutter_per_scan);
   for (int c = clutter(rng_); c > 0; --c) {
-    const double r = s_.max_range_m * std::sqrt(u(rng_));
+    // Uniform over the annulus sector between min and max range.
+    const double r0 = s_.min_range_m, r1 = s_.max_range_m;
+    const double r = std::sqrt(r0 * r0 + (r1 * r1 - r0 * r0) * u(rng_));
     out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1});
   }
   std::shuffle(out.observations.begin(), out.observations.end(), rng_);

@@ -5,6 +5,11 @@
 //   update:         one batch update with the associated pairs: S = H P H^T + R = L L^T,
 //                   W = P H^T L^-T, x <- x + W L^-1 nu, P <- P - W W^T (then symmetrised)  O(n^2 p)
 //   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
+//   review:         landmark bookkeeping: a new landmark is tentative until it is paired again;
+//                   one that is expected in view and missed too often is removed              O(n^2)
+// Landmark ids are stable: augment hands out increasing ids and removal keeps the order, so the id
+// of index j only ever grows with j, and index_of() is a binary search. Predictions, associations
+// and update() speak ids; indices are internal.
 // No heap: P is a fixed array of capacity (3 + 2 MaxLandmarks)^2, used in its top-left dim x dim
 // corner. Every call validates first and changes no state unless it returns kOk.
 #pragma once
@@ -43,6 +48,36 @@ struct Workspace {
   std::array<Mat2<T>, B::kMaxCandidates> cand_Hl;              ///< local map: dh/dlandmark
 };
 
+/// Where the sensor can see: review() counts a landmark as expected only when its predicted
+/// measurement lies inside. Shrink it by a few sigma so landmarks on the edge are not penalised.
+template <typename T>
+struct Visibility {
+  T min_range_m = T(0);
+  T max_range_m = T(0);
+  T half_fov_rad = T(0);
+};
+
+/// Tentative landmarks: a landmark is confirmed once it has been paired `confirm_hits` times (its
+/// first sighting counts). Until then it is removed when it has been expected in view and not
+/// paired `max_misses` times, or when `max_tentative_reviews` reviews have passed (it left the view
+/// unconfirmed). Confirmed landmarks are never removed. This keeps clutter that passed the
+/// augmentation gate out of the map.
+struct LandmarkPolicy {
+  int confirm_hits = 2;
+  int max_misses = 2;
+  int max_tentative_reviews = 10;
+  bool valid() const {
+    return confirm_hits >= 1 && confirm_hits <= 255 && max_misses >= 1 && max_misses <= 255 &&
+           max_tentative_reviews >= 1 && max_tentative_reviews <= 255;
+  }
+};
+
+struct ReviewStats {
+  int expected = 0;  ///< landmarks in the prediction that were in view
+  int paired = 0;    ///< of those, paired by the association
+  int removed = 0;   ///< tentative landmarks removed
+};
+
 struct LocalMapStats {
   int in_region = 0;       ///< landmarks within the radius
   bool truncated = false;  ///< more than MaxCandidates were: the nearest were kept
@@ -69,6 +104,7 @@ class Slam {
                  P0(0, 2) * (P0(1, 0) * P0(2, 1) - P0(1, 1) * P0(2, 0));
     if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
     n_ = 0;
+    next_id_ = 0;
     x_[0] = x0.x;
     x_[1] = x0.y;
     x_[2] = wrap_angle(x0.theta);
@@ -78,6 +114,20 @@ class Slam {
   }
 
   int landmarks() const { return n_; }
+  /// The stable id of landmark index j (0 <= j < landmarks()).
+  FeatureId id(int j) const { return id_[j]; }
+  /// Hits so far of landmark index j (saturating at 255), and whether it is confirmed.
+  int hits(int j) const { return hits_[j]; }
+  /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
+  int index_of(FeatureId id) const {
+    int lo = 0, hi = n_;  // binary search: ids increase with the index; <= log2(kMaxLandmarks) + 1 steps
+    while (lo < hi) {
+      const int mid = lo + (hi - lo) / 2;
+      if (id_[mid] < id) lo = mid + 1;
+      else hi = mid;
+    }
+    return lo < n_ && id_[lo] == id ? lo : -1;
+  }
   int dim() const { return Layout::landmark(n_); }
   Pose2<T> pose() const { return {x_[0], x_[1], x_[2]}; }
   Vec2<T> landmark(int j) const { return Vec2<T>(x_[Layout::landmark(j)], x_[Layout::landmark(j) + 1]); }
@@ -111,8 +161,8 @@ class Slam {
   }
 
   /// The association input for the current scan: the landmarks with predicted range < radius_m
-  /// (r + d, eq. 5), nearest first and at most MaxCandidates, with ids = landmark indices, their
-  /// predicted measurements h and C = H P H^T.
+  /// (r + d, eq. 5), nearest first and at most MaxCandidates, with their stable ids, predicted
+  /// measurements h and C = H P H^T.
   /// @return kOk; kInvalidInput for a radius that is not positive and finite.
   [[nodiscard]] Status predict_local(T radius_m, Workspace<T, B>& ws, Prediction<T, B>& out,
                                      LocalMapStats& stats) const {
@@ -146,7 +196,7 @@ class Slam {
     out.count = n;
     out.C.resize(2 * n, 2 * n);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-      out.id[a] = idx[a];
+      out.id[a] = id_[idx[a]];
       out.h[a] = observe(xr, landmark(idx[a]), &Hp[a], &Hl[a]);
     }
     const Mat3<T> Prr = block<3, 3>(0, 0);
@@ -166,7 +216,7 @@ class Slam {
     return Status::kOk;
   }
 
-  /// One batch update with every paired observation of `assoc` (feature ids are landmark indices).
+  /// One batch update with every paired observation of `assoc` (feature ids are landmark ids).
   /// @return kOk (also with no pairs); kInvalidInput for a count mismatch or an unknown landmark;
   ///         kNonFinite / kNotPositiveDefinite for bad observations or an S that is not positive
   ///         definite. No state changes unless kOk.
@@ -180,15 +230,16 @@ class Slam {
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const FeatureId f = assoc.feature[i];
       if (f < 0) continue;
-      if (f >= n_) return Status::kInvalidInput;
+      const int j = index_of(f);
+      if (j < 0) return Status::kInvalidInput;
       if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
       if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
-      const Vec2<T> h = observe(xr, landmark(f), &ws.Hp[p], &ws.Hl[p]);
+      const Vec2<T> h = observe(xr, landmark(j), &ws.Hp[p], &ws.Hl[p]);
       const Vec2<T> nu = innovation(obs.z[i], h);
       ws.nu[2 * p] = nu.x();
       ws.nu[2 * p + 1] = nu.y();
       ws.obs[p] = static_cast<std::int16_t>(i);
-      ws.lm[p] = static_cast<std::int16_t>(f);
+      ws.lm[p] = static_cast<std::int16_t>(j);
       ++p;
     }
     if (p == 0) return Status::kOk;
@@ -262,14 +313,16 @@ class Slam {
   }
 
   /// Adds a landmark observed at z = (range, bearing) with noise R from the current pose.
-  /// @param[out] id  the new landmark's index (stable for the map's life)
-  /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped; kNonFinite; kInvalidInput for a
-  ///         negative range; kNotPositiveDefinite for R. No state changes unless kOk.
+  /// The landmark starts tentative with one hit (see LandmarkPolicy).
+  /// @param[out] id  the new landmark's id (stable for the map's life; never reused)
+  /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped or the ids are used up; kNonFinite;
+  ///         kInvalidInput for a negative range; kNotPositiveDefinite for R. No state changes
+  ///         unless kOk.
   [[nodiscard]] Status augment(const Vec2<T>& z, const Mat2<T>& R, FeatureId& id) {
     if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
     if (z.x() < T(0)) return Status::kInvalidInput;
     if (!is_spd(R)) return Status::kNotPositiveDefinite;
-    if (n_ >= B::kMaxLandmarks) return Status::kCapacityExceeded;
+    if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     Mat23<T> Jp;
     Mat2<T> Jz;
     const Vec2<T> l = inverse_observe(pose(), z, &Jp, &Jz);
@@ -287,8 +340,76 @@ class Slam {
     set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
     x_[k] = l.x();
     x_[k + 1] = l.y();
-    id = n_;
+    id_[n_] = next_id_;
+    hits_[n_] = 1;
+    misses_[n_] = 0;
+    age_[n_] = 0;
+    id = next_id_++;
     ++n_;
+    return Status::kOk;
+  }
+
+  /// Landmark bookkeeping after a scan's update and augment: every landmark of `pred` (this scan's
+  /// prediction) whose predicted measurement is in `view` was expected; paired by `assoc`, it
+  /// gains a hit, otherwise a miss. Tentative landmarks with policy.max_misses misses, or older
+  /// than policy.max_tentative_reviews reviews, are removed (state and covariance compacted; the
+  /// other ids are unchanged).
+  /// @return kOk; kInvalidInput for a bad policy or view, or counts out of range. No state changes
+  ///         unless kOk.
+  [[nodiscard]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
+                              const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats) {
+    if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
+        !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad)) {
+      return Status::kInvalidInput;
+    }
+    if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 ||
+        assoc.count > B::kMaxObservations) {
+      return Status::kInvalidInput;
+    }
+    stats = ReviewStats{};
+    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+      const int j = index_of(pred.id[a]);
+      if (j < 0) continue;  // not in this map
+      bool paired = false;
+      for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
+      const Vec2<T>& h = pred.h[a];
+      const bool in_view =
+          h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+      stats.expected += in_view;
+      if (paired) {
+        ++stats.paired;
+        if (hits_[j] < 255) ++hits_[j];
+      } else if (in_view && misses_[j] < 255) {
+        ++misses_[j];
+      }
+    }
+    // Compaction in index order: every source index >= its destination, so nothing is overwritten
+    // before it is read.
+    std::int16_t keep[B::kMaxLandmarks];
+    int kept = 0;
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+      if (hits_[j] < policy.confirm_hits) {
+        if (age_[j] < 255) ++age_[j];
+        if (misses_[j] >= policy.max_misses || age_[j] >= policy.max_tentative_reviews) continue;
+      }
+      keep[kept++] = static_cast<std::int16_t>(j);
+    }
+    stats.removed = n_ - kept;
+    if (kept == n_) return Status::kOk;
+    auto old_row = [&](int r) { return r < Layout::kPoseSize ? r : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2; };
+    const int n = Layout::landmark(kept);
+    for (int r = 0; r < n; ++r) {  // <= kMaxState
+      const int orow = old_row(r);
+      for (int c = 0; c < n; ++c) P(r, c) = P(orow, old_row(c));  // <= kMaxState
+      x_[r] = x_[orow];
+    }
+    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
+      id_[k] = id_[keep[k]];
+      hits_[k] = hits_[keep[k]];
+      misses_[k] = misses_[keep[k]];
+      age_[k] = age_[keep[k]];
+    }
+    n_ = kept;
     return Status::kOk;
   }
 
@@ -308,7 +429,13 @@ class Slam {
       for (int c = 0; c < C; ++c) P(r0 + r, c0 + c) = b(r, c);
   }
 
+  static constexpr FeatureId kMaxId = 0x7fffffff;
   std::array<T, kMaxState> x_{};
+  std::array<FeatureId, B::kMaxLandmarks> id_{};
+  std::array<std::uint8_t, B::kMaxLandmarks> hits_{};
+  std::array<std::uint8_t, B::kMaxLandmarks> misses_{};
+  std::array<std::uint8_t, B::kMaxLandmarks> age_{};  ///< reviews since augment, while tentative
+  FeatureId next_id_ = 0;
   std::array<T, static_cast<std::size_t>(kMaxState) * kMaxState> p_{};
   int n_ = 0;
 };

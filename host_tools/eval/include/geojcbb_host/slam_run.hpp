@@ -10,12 +10,16 @@
 // Augmentation rule: an observation with no compatible candidate (kNewFeature) becomes a landmark
 // only if its nearest d2 also exceeds a second, wider gate (chi2(0.999, 2) by default); between the
 // two gates it is too close to a mapped feature to be new and too far to pair, and is dropped.
+// A new landmark is tentative until it is paired again; expected in view and missed twice before
+// that, it leaves the map (ekf::LandmarkPolicy). Clutter that passes the second gate is rarely seen
+// twice in one place, so it is gone a few scans later; landmark ids stay stable throughout.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "geojcbb/core/strategy.hpp"
+#include "geojcbb/ekf/slam.hpp"
 #include "geojcbb_host/scene.hpp"
 #include "geojcbb_host/sim.hpp"
 
@@ -29,6 +33,13 @@ struct RunOptions {
   int groups = 3;                  ///< K for k-means / GMM-EM
   bool condition_groups = false;
   int max_steps = 0;               ///< stop after this many control intervals (0: the whole path)
+  ekf::LandmarkPolicy landmark_policy;  ///< tentative landmarks (confirm / remove)
+  double view_margin_m = 1.0;      ///< a landmark within this of the range limits is not expected
+};
+
+struct MapLandmark {
+  double x, y;
+  int truth;  ///< true landmark index, or -1 when made from clutter
 };
 
 struct StepRecord {
@@ -43,7 +54,11 @@ struct RunResult {
   int scans = 0;
   int observations = 0;           ///< scored observations (= TP + TN + FP + FN)
   int landmarks = 0;              ///< mapped at the end
-  int spurious_landmarks = 0;     ///< mapped from clutter
+  int spurious_landmarks = 0;     ///< augmented from clutter (over the run)
+  int spurious_in_map = 0;        ///< made from clutter and still mapped at the end
+  int removed_spurious_landmarks = 0;  ///< tentative landmarks from clutter removed
+  int removed_true_landmarks = 0;      ///< tentative landmarks of true landmarks removed
+  std::vector<MapLandmark> map;   ///< the final map
   int dropped_observations = 0;   ///< over the observation capacity in a scan
   int budget_hits = 0;            ///< scans whose JCBB node budget ran out
   double association_s = 0;       ///< total association time

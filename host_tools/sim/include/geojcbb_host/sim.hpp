@@ -30,6 +30,9 @@ struct Scenario {
   double sigma_v_mps = 0.3;         ///< odometry noise (Bailey: speed 0.3 m/s)
   double sigma_w_radps = 0.04;      ///< (Bailey: steering 3 deg on a 4 m wheelbase at 3 m/s)
   double max_range_m = 30.0;
+  /// Nearer landmarks are not seen (a laser's blind zone); > 3 sigma_range keeps every simulated
+  /// range positive.
+  double min_range_m = 1.0;
   double fov_rad = 3.14159265358979;  ///< full field of view (centred ahead)
   double sigma_range_m = 0.1;       ///< (Bailey: 0.1 m)
   double sigma_bearing_rad = 0.01745329;  ///< (Bailey: 1 deg)
