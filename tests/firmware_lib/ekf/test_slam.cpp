@@ -243,15 +243,118 @@ TEST_CASE_TEMPLATE("the filter allocates nothing", T, float, double) {
   FeatureId id;
   f->assoc.count = f->obs.count;
   for (int i = 0; i < f->obs.count; ++i) f->assoc.feature[i] = i < f->slam.landmarks() ? i : kNewFeature;
-  Status s1, s2, s3, s4;
+  Status s1, s2, s3, s4, s5;
+  ReviewStats rs;
+  const Visibility<T> view{T(0.5), T(7), T(1.5)};
+  LandmarkPolicy strict;
+  strict.max_misses = 1;
   CHECK(allocations_during([&] {
           s1 = f->slam.predict(Odometry<T>{T(1), T(0.1), T(0.1), T(0.05), T(0.02)});
           s2 = f->slam.predict_local(T(8), f->ws, f->pred, st);
           s3 = f->slam.update(f->obs, f->assoc, f->ws);
           s4 = f->slam.augment(Vec2<T>(T(2), T(0.3)), Mat2<T>::Identity() * T(0.01), id);
+          s5 = f->slam.review(f->pred, f->assoc, view, strict, rs);
         }) == 0);
   CHECK(s1 == Status::kOk);
   CHECK(s2 == Status::kOk);
   CHECK(s3 == Status::kOk);
   CHECK(s4 == Status::kOk);
+  CHECK(s5 == Status::kOk);
+}
+
+// Landmark bookkeeping: five landmarks ahead of the robot; the association pairs some of them.
+TEST_CASE_TEMPLATE("review removes tentative landmarks that are missed, and keeps ids stable", T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  FeatureId id = -1;
+  for (int k = 0; k < 5; ++k) {
+    REQUIRE(f->slam.augment(Vec2<T>(T(2 + k), T(0.2) * T(k - 2)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);
+    CHECK(id == k);
+  }
+  LocalMapStats st;
+  REQUIRE(f->slam.predict_local(T(20), f->ws, f->pred, st) == Status::kOk);
+  REQUIRE(f->pred.count == 5);
+  const Visibility<T> view{T(0.5), T(10), T(1.5)};
+  LandmarkPolicy policy;  // confirm at 2 hits, remove at 2 misses
+  // Scan 1: landmarks 0, 2 and 4 paired (confirmed); 1 and 3 missed once.
+  f->assoc.count = 3;
+  f->assoc.feature[0] = 4;
+  f->assoc.feature[1] = 0;
+  f->assoc.feature[2] = 2;
+  ReviewStats rs;
+  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  CHECK(rs.expected == 5);
+  CHECK(rs.paired == 3);
+  CHECK(rs.removed == 0);
+  CHECK(f->slam.landmarks() == 5);
+  // Scan 2: nothing paired: 1 and 3 reach two misses and go; 0, 2, 4 are confirmed and stay.
+  auto before = std::make_unique<Slam<T, EB>>(f->slam);
+  f->assoc.count = 0;
+  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  CHECK(rs.removed == 2);
+  REQUIRE(f->slam.landmarks() == 3);
+  const int kept[3] = {0, 2, 4};
+  for (int k = 0; k < 3; ++k) {
+    CHECK(f->slam.id(k) == kept[k]);
+    CHECK(f->slam.index_of(kept[k]) == k);
+    CHECK(f->slam.landmark(k) == before->landmark(kept[k]));
+  }
+  CHECK(f->slam.index_of(1) == -1);
+  CHECK(f->slam.index_of(3) == -1);
+  CHECK(f->slam.index_of(5) == -1);
+  // The covariance is the old one with the removed rows and columns deleted, exactly.
+  auto old_row = [](int r) { return r < 3 ? r : Layout::landmark(2 * ((r - 3) / 2)) + (r - 3) % 2; };
+  for (int r = 0; r < f->slam.dim(); ++r) {
+    CHECK(f->slam.x(r) == before->x(old_row(r)));
+    for (int c = 0; c < f->slam.dim(); ++c) CHECK(f->slam.cov(r, c) == before->cov(old_row(r), old_row(c)));
+  }
+  // A new landmark gets a fresh id, never a removed one; update() speaks ids.
+  REQUIRE(f->slam.augment(Vec2<T>(T(3), T(0.1)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);
+  CHECK(id == 5);
+  CHECK(f->slam.index_of(5) == 3);
+  f->obs.clear();
+  REQUIRE(f->obs.push(Vec2<T>(T(6), T(0.4)), Mat2<T>::Identity() * T(0.01)) == Status::kOk);
+  f->assoc.count = 1;
+  f->assoc.feature[0] = 3;  // removed
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kInvalidInput);
+  f->assoc.feature[0] = 4;
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kOk);
+}
+
+TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is removed; bad input changes nothing",
+                   T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  FeatureId id = -1;
+  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);     // ahead
+  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(2.5)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);   // behind
+  LocalMapStats st;
+  REQUIRE(f->slam.predict_local(T(20), f->ws, f->pred, st) == Status::kOk);
+  const Visibility<T> view{T(0.5), T(10), T(1.5)};
+  LandmarkPolicy policy;
+  policy.max_tentative_reviews = 4;
+  f->assoc.count = 1;
+  f->assoc.feature[0] = 0;  // the one ahead is paired: confirmed
+  ReviewStats rs;
+  for (int k = 0; k < 3; ++k) {
+    REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+    CHECK(rs.expected == 1);
+    CHECK(f->slam.landmarks() == 2);  // out of view: no misses, not yet too old
+  }
+  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  CHECK(rs.removed == 1);  // fourth review: tentative for too long
+  REQUIRE(f->slam.landmarks() == 1);
+  CHECK(f->slam.id(0) == 0);
+  // Bad input: nothing changes.
+  auto snapshot = std::make_unique<Slam<T, EB>>(f->slam);
+  auto same = [&] { return std::memcmp(snapshot.get(), &f->slam, sizeof(f->slam)) == 0; };
+  LandmarkPolicy bad;
+  bad.max_misses = 0;
+  CHECK(f->slam.review(f->pred, f->assoc, view, bad, rs) == Status::kInvalidInput);
+  CHECK(f->slam.review(f->pred, f->assoc, Visibility<T>{T(5), T(1), T(1)}, policy, rs) == Status::kInvalidInput);
+  CHECK(f->slam.review(f->pred, f->assoc, Visibility<T>{T(0), std::numeric_limits<T>::infinity(), T(1)}, policy, rs) ==
+        Status::kInvalidInput);
+  f->assoc.count = EB::kMaxObservations + 1;
+  CHECK(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kInvalidInput);
+  CHECK(same());
 }
