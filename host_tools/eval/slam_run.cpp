@@ -1,12 +1,11 @@
 #include "geojcbb_host/slam_run.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <memory>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/Dense>
 
 #include "geojcbb/associate.hpp"
 #include "geojcbb/ekf/slam.hpp"
@@ -16,138 +15,174 @@ namespace geojcbb::host {
 namespace {
 using EB = Bounds<48, 128, 8, 200000, 400>;  // host evaluation capacity
 
-struct State {
+constexpr int kRemoved = -2;  // feature_truth of a landmark id that has left the map
+
+void check(Status s, const char *what) {
+  if (s != Status::kOk) throw std::runtime_error(std::string(what) + ": " + to_string(s));
+}
+}  // namespace
+
+struct SlamSession::State {
   ekf::Slam<double, EB> slam;
   ekf::Workspace<double, EB> ekf_ws;
   Observations<double, EB> obs;
   Prediction<double, EB> pred;
   Workspace<double, EB> ws;
   Association<double, EB> out;
+  AssociationConfig<double, EB> cfg;
+  RunOptions opt;
+  ekf::Visibility<double> view;  // where a mapped landmark is expected: the sensor's view, shrunk
+  double second_gate = 0;
+  std::vector<int> feature_truth;   // landmark id -> true landmark it came from (-1 clutter)
+  std::vector<int> mapped;          // true landmark -> map landmarks made from it
+  std::vector<int> landmark_group;  // true landmark -> its group (empty: each its own)
+  int cls(int t) const { return landmark_group.empty() ? t : landmark_group[t]; }
+  RunResult res;
 };
 
-constexpr int kRemoved = -2;  // feature_truth of a landmark id that has left the map
-
-void check(Status s, const char* what) {
-  if (s != Status::kOk) throw std::runtime_error(std::string(what) + ": " + to_string(s));
-}
-}  // namespace
-
-RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt) {
-  auto st = std::make_unique<State>();
+SlamSession::SlamSession(const RunOptions &opt, const SensorModel &sensor, std::size_t true_landmarks,
+                         const Pose2<double> &x0, const Eigen::Matrix3d &P0)
+    : st_(std::make_unique<State>()) {
+  State &s = *st_;
+  s.opt = opt;
   StrategyParams<double> sp;
   sp.confidence = opt.confidence;
-  sp.local_radius_m = sc.max_range_m + opt.compensation_m;
+  sp.local_radius_m = sensor.max_range_m + opt.compensation_m;
   sp.groups = opt.groups;
   sp.condition_groups = opt.condition_groups;
-  AssociationConfig<double, EB> cfg;
-  check(make_strategy(opt.strategy, sp, cfg), "make_strategy");
-  double second_gate = 0;
-  check(chi2_inv(opt.new_landmark_gate, 2, second_gate), "chi2_inv");
+  check(make_strategy(opt.strategy, sp, s.cfg), "make_strategy");
+  check(chi2_inv(opt.new_landmark_gate, 2, s.second_gate), "chi2_inv");
+  s.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
+  s.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
+  s.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  s.mapped.assign(true_landmarks, 0);
+  if (!opt.landmark_group.empty() && opt.landmark_group.size() != true_landmarks) {
+    throw std::runtime_error("landmark_group: one entry per true landmark expected");
+  }
+  s.landmark_group = opt.landmark_group;
+  check(s.slam.reset(x0, P0), "reset");
+}
 
-  Simulator sim(sc, seed);
-  SimStep step;
-  RunResult res;
-  res.observations = 0;
-  std::vector<int> feature_truth;                 // landmark id -> true landmark it came from (-1 clutter)
-  std::vector<int> mapped(sc.landmarks.size(), 0);  // true landmark -> map landmarks made from it
-  ekf::Visibility<double> view;  // where a mapped landmark is expected: the sensor's view, shrunk
-  view.min_range_m = sc.min_range_m + opt.view_margin_m;
-  view.max_range_m = sc.max_range_m - opt.view_margin_m;
-  view.half_fov_rad = 0.5 * sc.fov_rad - 3 * sc.sigma_bearing_rad;
-  {
-    const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
-    const Pose2<double> x0{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
-    check(st->slam.reset(x0, Mat3<double>::Identity() * 1e-12), "reset");
-  }
-  const Mat2<double> R = Vec2<double>(sc.sigma_range_m * sc.sigma_range_m,
-                                      sc.sigma_bearing_rad * sc.sigma_bearing_rad).asDiagonal();
-  std::vector<SimObservation> scan;
-  long k = 0;
-  while (sim.step(step) && (opt.max_steps == 0 || k < opt.max_steps)) {
-    ++k;
-    check(st->slam.predict(ekf::Odometry<double>{step.v_mps, step.w_radps, sc.dt_s, sc.sigma_v_mps,
-                                                 sc.sigma_w_radps}),
-          "predict");
-    if (!step.scan) continue;
-    ++res.scans;
-    // Observations over the capacity: the nearest are kept.
-    scan = step.observations;
-    std::sort(scan.begin(), scan.end(), [](const auto& a, const auto& b) { return a.z.x() < b.z.x(); });
-    if (scan.size() > static_cast<std::size_t>(EB::kMaxObservations)) {
-      res.dropped_observations += static_cast<int>(scan.size()) - EB::kMaxObservations;
-      scan.resize(EB::kMaxObservations);
-    }
-    st->obs.clear();
-    for (const SimObservation& o : scan) check(st->obs.push(o.z, R), "push");
-    ekf::LocalMapStats ls;
-    check(st->slam.predict_local(cfg.local_radius_m, st->ekf_ws, st->pred, ls), "predict_local");
-    const auto t0 = std::chrono::steady_clock::now();
-    check(associate(st->obs, st->pred, cfg, st->ws, st->out), "associate");
-    res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    res.budget_hits += st->out.diag.node_budget_hit;
-    res.observations += static_cast<int>(scan.size());
-    for (std::size_t i = 0; i < scan.size(); ++i) {
-      const int t = scan[i].truth;
-      const FeatureId f = st->out.feature[i];
-      const bool known = t >= 0 && mapped[t] > 0;
-      if (f >= 0) {
-        ++((t >= 0 && feature_truth[f] == t) ? res.score.tp : res.score.fp);
-      } else if (known) {
-        ++res.score.fn;
-      } else {
-        ++res.score.tn;
-      }
-    }
-    check(st->slam.update(st->obs, st->out, st->ekf_ws), "update");
-    for (std::size_t i = 0; i < scan.size(); ++i) {
-      if (st->out.feature[i] != kNewFeature || !(st->out.d2[i] > second_gate)) continue;
-      FeatureId id = -1;
-      check(st->slam.augment(st->obs.z[i], st->obs.R[i], id), "augment (map capacity)");
-      feature_truth.push_back(scan[i].truth);
-      if (scan[i].truth >= 0) ++mapped[scan[i].truth];
-      else ++res.spurious_landmarks;
-    }
-    // Landmark bookkeeping: tentative landmarks missed too often leave the map.
-    ekf::ReviewStats rs;
-    check(st->slam.review(st->pred, st->out, view, opt.landmark_policy, rs), "review");
-    if (rs.removed > 0) {
-      std::vector<bool> alive(feature_truth.size(), false);
-      for (int j = 0; j < st->slam.landmarks(); ++j) alive[st->slam.id(j)] = true;
-      for (std::size_t id = 0; id < feature_truth.size(); ++id) {
-        if (alive[id] || feature_truth[id] == kRemoved) continue;
-        if (feature_truth[id] >= 0) --mapped[feature_truth[id]], ++res.removed_true_landmarks;
-        else ++res.removed_spurious_landmarks;
-        feature_truth[id] = kRemoved;
-      }
-    }
+SlamSession::~SlamSession() = default;
 
-    StepRecord r;
-    r.t_s = step.t_s;
-    r.truth = step.true_pose;
-    r.estimate = st->slam.pose();
-    r.var_x = st->slam.cov(0, 0);
-    r.var_y = st->slam.cov(1, 1);
-    const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
-                            wrap_angle(r.estimate.theta - r.truth.theta));
-    Eigen::Matrix3d P;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) P(a, b) = st->slam.cov(a, b);
-    r.pose_nees = e.dot(P.ldlt().solve(e));
-    res.mean_abs_x_m += std::abs(e.x());
-    res.mean_abs_y_m += std::abs(e.y());
-    res.steps.push_back(r);
+Pose2<double> SlamSession::pose() const { return st_->slam.pose(); }
+
+void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
+  check(st_->slam.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
+}
+
+void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d &R, double t_s,
+                       const Pose2<double> *truth) {
+  State &s = *st_;
+  RunResult &res = s.res;
+  ++res.scans;
+  // Observations over the capacity: the nearest are kept.
+  std::sort(scan.begin(), scan.end(), [](const auto &a, const auto &b) { return a.z.x() < b.z.x(); });
+  if (scan.size() > static_cast<std::size_t>(EB::kMaxObservations)) {
+    res.dropped_observations += static_cast<int>(scan.size()) - EB::kMaxObservations;
+    scan.resize(EB::kMaxObservations);
   }
-  if (res.scans > 0) {
-    res.mean_abs_x_m /= res.scans;
-    res.mean_abs_y_m /= res.scans;
+  s.obs.clear();
+  for (const SimObservation &o : scan) check(s.obs.push(o.z, R), "push");
+  ekf::LocalMapStats ls;
+  check(s.slam.predict_local(s.cfg.local_radius_m, s.ekf_ws, s.pred, ls), "predict_local");
+  const auto t0 = std::chrono::steady_clock::now();
+  check(associate(s.obs, s.pred, s.cfg, s.ws, s.out), "associate");
+  res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.budget_hits += s.out.diag.node_budget_hit;
+  res.observations += static_cast<int>(scan.size());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const int t = scan[i].truth;
+    const FeatureId f = s.out.feature[i];
+    const bool known = t >= 0 && s.mapped[t] > 0;
+    if (f >= 0) {
+      const int ft = s.feature_truth[f];
+      ++((t >= 0 && ft == t) ? res.score.tp : res.score.fp);
+      ++((t >= 0 && ft >= 0 && s.cls(ft) == s.cls(t)) ? res.group_score.tp : res.group_score.fp);
+    } else if (known) {
+      ++res.score.fn;
+      ++res.group_score.fn;
+    } else {
+      ++res.score.tn;
+      ++res.group_score.tn;
+    }
   }
-  res.landmarks = st->slam.landmarks();
+  check(s.slam.update(s.obs, s.out, s.ekf_ws), "update");
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (s.out.feature[i] != kNewFeature || !(s.out.d2[i] > s.second_gate)) continue;
+    FeatureId id = -1;
+    check(s.slam.augment(s.obs.z[i], s.obs.R[i], id), "augment (map capacity)");
+    s.feature_truth.push_back(scan[i].truth);  // ids are handed out in order: index = id
+    if (scan[i].truth >= 0)
+      ++s.mapped[scan[i].truth];
+    else
+      ++res.spurious_landmarks;
+  }
+  // Landmark bookkeeping: tentative landmarks missed too often leave the map.
+  ekf::ReviewStats rs;
+  check(s.slam.review(s.pred, s.out, s.view, s.opt.landmark_policy, rs), "review");
+  if (rs.removed > 0) {
+    std::vector<bool> alive(s.feature_truth.size(), false);
+    for (int j = 0; j < s.slam.landmarks(); ++j) alive[s.slam.id(j)] = true;
+    for (std::size_t id = 0; id < s.feature_truth.size(); ++id) {
+      if (alive[id] || s.feature_truth[id] == kRemoved) continue;
+      if (s.feature_truth[id] >= 0)
+        --s.mapped[s.feature_truth[id]], ++res.removed_true_landmarks;
+      else
+        ++res.removed_spurious_landmarks;
+      s.feature_truth[id] = kRemoved;
+    }
+  }
+  if (truth == nullptr) return;
+  StepRecord r;
+  r.t_s = t_s;
+  r.truth = *truth;
+  r.estimate = s.slam.pose();
+  r.var_x = s.slam.cov(0, 0);
+  r.var_y = s.slam.cov(1, 1);
+  const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
+                          wrap_angle(r.estimate.theta - r.truth.theta));
+  Eigen::Matrix3d P;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) P(a, b) = s.slam.cov(a, b);
+  r.pose_nees = e.dot(P.ldlt().solve(e));
+  res.mean_abs_x_m += std::abs(e.x());
+  res.mean_abs_y_m += std::abs(e.y());
+  res.steps.push_back(r);
+}
+
+RunResult SlamSession::finish() {
+  State &s = *st_;
+  RunResult res = s.res;
+  if (!res.steps.empty()) {
+    res.mean_abs_x_m /= static_cast<double>(res.steps.size());
+    res.mean_abs_y_m /= static_cast<double>(res.steps.size());
+  }
+  res.landmarks = s.slam.landmarks();
   for (int j = 0; j < res.landmarks; ++j) {
-    const int t = feature_truth[st->slam.id(j)];
-    res.map.push_back({st->slam.landmark(j).x(), st->slam.landmark(j).y(), t});
+    const int t = s.feature_truth[s.slam.id(j)];
+    res.map.push_back({s.slam.landmark(j).x(), s.slam.landmark(j).y(), t});
     res.spurious_in_map += t < 0;
   }
   return res;
+}
+
+RunResult run_slam(const Scenario &sc, std::uint64_t seed, const RunOptions &opt) {
+  const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
+  const Pose2<double> x0{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
+  const SensorModel sensor{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad};
+  SlamSession session(opt, sensor, sc.landmarks.size(), x0, Eigen::Matrix3d::Identity() * 1e-12);
+  const Eigen::Matrix2d R =
+      Eigen::Vector2d(sc.sigma_range_m * sc.sigma_range_m, sc.sigma_bearing_rad * sc.sigma_bearing_rad).asDiagonal();
+  Simulator sim(sc, seed);
+  SimStep step;
+  long k = 0;
+  while (sim.step(step) && (opt.max_steps == 0 || k < opt.max_steps)) {
+    ++k;
+    session.predict(step.v_mps, step.w_radps, sc.dt_s, sc.sigma_v_mps, sc.sigma_w_radps);
+    if (step.scan) session.scan(step.observations, R, step.t_s, &step.true_pose);
+  }
+  return session.finish();
 }
 
 }  // namespace geojcbb::host

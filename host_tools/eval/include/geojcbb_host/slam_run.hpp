@@ -1,21 +1,25 @@
-// host_tools/eval: one EKF-SLAM run over a simulated scenario with a chosen association strategy,
-// scored against the simulator's ground truth with the papers' definitions (2019 paper, eqs. 15-19):
-//   TP  a pair whose map feature was initialised from the observation's true landmark
-//   FP  any other pair (wrong feature, or clutter paired)
-//   FN  an observation of a mapped landmark left unpaired
-//   TN  an observation correctly left unpaired: clutter, or a landmark not yet in the map
-// Every observation falls in exactly one class, so Total = TP + TN + FP + FN (eq. 15). (The
-// association benchmarks count recall against ground-truth pairs instead, where a wrong pair of a
-// mapped landmark is also a missed one.)
-// Augmentation rule: an observation with no compatible candidate (kNewFeature) becomes a landmark
-// only if its nearest d2 also exceeds a second, wider gate (chi2(0.999, 2) by default); between the
-// two gates it is too close to a mapped feature to be new and too far to pair, and is dropped.
-// A new landmark is tentative until it is paired again; expected in view and missed twice before
-// that, it leaves the map (ekf::LandmarkPolicy). Clutter that passes the second gate is rarely seen
-// twice in one place, so it is gone a few scans later; landmark ids stay stable throughout.
+// host_tools/eval: one EKF-SLAM run over a simulated scenario with a chosen
+// association strategy, scored against the simulator's ground truth with the
+// papers' definitions (2019 paper, eqs. 15-19):
+//   TP  a pair whose map feature was initialised from the observation's true
+//   landmark FP  any other pair (wrong feature, or clutter paired) FN  an
+//   observation of a mapped landmark left unpaired TN  an observation correctly
+//   left unpaired: clutter, or a landmark not yet in the map
+// Every observation falls in exactly one class, so Total = TP + TN + FP + FN
+// (eq. 15). (The association benchmarks count recall against ground-truth pairs
+// instead, where a wrong pair of a mapped landmark is also a missed one.)
+// Augmentation rule: an observation with no compatible candidate (kNewFeature)
+// becomes a landmark only if its nearest d2 also exceeds a second, wider gate
+// (chi2(0.999, 2) by default); between the two gates it is too close to a
+// mapped feature to be new and too far to pair, and is dropped. A new landmark
+// is tentative until it is paired again; expected in view and missed twice
+// before that, it leaves the map (ekf::LandmarkPolicy). Clutter that passes the
+// second gate is rarely seen twice in one place, so it is gone a few scans
+// later; landmark ids stay stable throughout.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "geojcbb/core/strategy.hpp"
@@ -27,14 +31,18 @@ namespace geojcbb::host {
 
 struct RunOptions {
   Strategy strategy = Strategy::kGeojcbb;
-  double confidence = 0.99;        ///< chi-square level of the individual and joint gates
+  double confidence = 0.99;          ///< chi-square level of the individual and joint gates
   double new_landmark_gate = 0.999;  ///< second gate for augmentation (chi-square level, 2 dof)
-  double compensation_m = 5.0;     ///< d in r + d (eq. 5); r is the scenario's max range
-  int groups = 3;                  ///< K for k-means / GMM-EM
+  double compensation_m = 5.0;       ///< d in r + d (eq. 5); r is the scenario's max range
+  int groups = 3;                    ///< K for k-means / GMM-EM
   bool condition_groups = false;
-  int max_steps = 0;               ///< stop after this many control intervals (0: the whole path)
+  int max_steps = 0;                    ///< stop after this many control intervals (0: the whole path)
   ekf::LandmarkPolicy landmark_policy;  ///< tentative landmarks (confirm / remove)
-  double view_margin_m = 1.0;      ///< a landmark within this of the range limits is not expected
+  double view_margin_m = 1.0;           ///< a landmark within this of the range limits is not expected
+  /// Optional: true landmark -> group, for RunResult::group_score (landmarks
+  /// too close together for geometry to tell apart share a group). Empty:
+  /// group_score equals score.
+  std::vector<int> landmark_group;
 };
 
 struct MapLandmark {
@@ -51,23 +59,61 @@ struct StepRecord {
 
 struct RunResult {
   Score score;
+  Score group_score;  ///< as score, but a pair is correct when its feature's
+                      ///< landmark is in the same group
   int scans = 0;
-  int observations = 0;           ///< scored observations (= TP + TN + FP + FN)
-  int landmarks = 0;              ///< mapped at the end
-  int spurious_landmarks = 0;     ///< augmented from clutter (over the run)
-  int spurious_in_map = 0;        ///< made from clutter and still mapped at the end
+  int observations = 0;                ///< scored observations (= TP + TN + FP + FN)
+  int landmarks = 0;                   ///< mapped at the end
+  int spurious_landmarks = 0;          ///< augmented from clutter (over the run)
+  int spurious_in_map = 0;             ///< made from clutter and still mapped at the end
   int removed_spurious_landmarks = 0;  ///< tentative landmarks from clutter removed
   int removed_true_landmarks = 0;      ///< tentative landmarks of true landmarks removed
-  std::vector<MapLandmark> map;   ///< the final map
-  int dropped_observations = 0;   ///< over the observation capacity in a scan
-  int budget_hits = 0;            ///< scans whose JCBB node budget ran out
-  double association_s = 0;       ///< total association time
-  double mean_abs_x_m = 0, mean_abs_y_m = 0;
-  std::vector<StepRecord> steps;  ///< one per scan
+  std::vector<MapLandmark> map;        ///< the final map
+  int dropped_observations = 0;        ///< over the observation capacity in a scan
+  int budget_hits = 0;                 ///< scans whose JCBB node budget ran out
+  double association_s = 0;            ///< total association time
+  double mean_abs_x_m = 0,
+         mean_abs_y_m = 0;        ///< over the scans with a true pose
+  std::vector<StepRecord> steps;  ///< one per scan with a true pose
 };
 
-/// Runs one seed of one scenario. Throws std::runtime_error when the map capacity is exceeded or
-/// a library call fails (the message names the call and its status).
-RunResult run_slam(const Scenario& scenario, std::uint64_t seed, const RunOptions& options);
+/// The sensor as the filter knows it, for the local region and for which
+/// landmarks are expected.
+struct SensorModel {
+  double min_range_m = 0, max_range_m = 30, fov_rad = 3.14159265358979, sigma_bearing_rad = 0.0175;
+};
+
+/// One EKF-SLAM run fed step by step (the simulator and the MRCLAM replay both
+/// drive it): predict with odometry; per scan associate, score against the
+/// observations' truth, update, augment and review the landmarks. Host
+/// capacity: 48 observations per scan (the nearest are kept), 128 candidates,
+/// 400 landmarks. Throws std::runtime_error when the map capacity is exceeded
+/// or a library call fails (the message names the call and its status).
+class SlamSession {
+ public:
+  SlamSession(const RunOptions &options, const SensorModel &sensor, std::size_t true_landmarks, const Pose2<double> &x0,
+              const Eigen::Matrix3d &P0);
+  ~SlamSession();
+  SlamSession(const SlamSession &) = delete;
+  SlamSession &operator=(const SlamSession &) = delete;
+
+  void predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps);
+  /// One scan; each observation's truth is a landmark index < true_landmarks,
+  /// or -1 for clutter. `truth` is the true pose at the scan, for the pose
+  /// error and NEES (nullptr: not recorded).
+  void scan(std::vector<SimObservation> observations, const Eigen::Matrix2d &R, double t_s, const Pose2<double> *truth);
+  Pose2<double> pose() const;
+  /// The result so far; finish() adds the final map and the means.
+  RunResult finish();
+
+ private:
+  struct State;
+  std::unique_ptr<State> st_;
+};
+
+/// Runs one seed of one scenario. Throws std::runtime_error when the map
+/// capacity is exceeded or a library call fails (the message names the call and
+/// its status).
+RunResult run_slam(const Scenario &scenario, std::uint64_t seed, const RunOptions &options);
 
 }  // namespace geojcbb::host

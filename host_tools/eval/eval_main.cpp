@@ -1,0 +1,455 @@
+// geojcbb_eval: the evaluation that reproduces the papers' tables and figures.
+//   sim     Monte Carlo EKF-SLAM runs over simulated scenarios (default: env1
+//   and env2, 20 runs each,
+//           every strategy on the same seeds): Table 1 (association time),
+//           Table 2 (TP/TN/FP/FN, precision, recall, F1, accuracy), x/y pose
+//           error, NEES with its 95 % bounds; CSV, JSON and SVG figures (path
+//           fitting, x/y error over time, F1 per strategy, NEES over time).
+//   mrclam  the same filter and metrics on the UTIAS MRCLAM real data (every
+//   strategy, every robot).
+// Timing never decides anything here; it is reported.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "geojcbb/core/chi_square.hpp"
+#include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/mrclam_replay.hpp"
+#include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/svg_plot.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::host;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Per (scenario, strategy): sums over the runs.
+struct Cell {
+  Score score;
+  int runs = 0, scans = 0, observations = 0, budget_hits = 0, landmarks = 0, spurious_in_map = 0;
+  int removed_true = 0, failed = 0;
+  double assoc_s = 0, run_s = 0, abs_x = 0, abs_y = 0;
+  std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
+  RunResult first;                                  ///< the first seed's run, for the path figure
+  bool have_first = false;
+  std::string error;
+};
+
+struct SimOptions {
+  std::vector<std::string> scenarios;
+  int runs = 20;
+  std::uint64_t seed = 1;
+  std::vector<std::string> strategies;
+  int jobs = 0;
+  std::string out_dir = "build/results/eval";
+  bool svg = true;
+  bool progress = true;
+  RunOptions run;
+};
+
+std::vector<Strategy> parse_strategies(const std::vector<std::string> &names) {
+  std::vector<Strategy> out;
+  if (names.empty()) {
+    for (int k = 0; k < kStrategyCount; ++k) out.push_back(static_cast<Strategy>(k));
+    return out;
+  }
+  for (const std::string &n : names) {
+    bool found = false;
+    for (int k = 0; k < kStrategyCount && !found; ++k) {
+      std::string a = to_string(static_cast<Strategy>(k)), b = n;
+      std::transform(a.begin(), a.end(), a.begin(), ::tolower);
+      std::transform(b.begin(), b.end(), b.begin(), ::tolower);
+      if (a == b) {
+        out.push_back(static_cast<Strategy>(k));
+        found = true;
+      }
+    }
+    if (!found) throw std::runtime_error("unknown strategy '" + n + "'");
+  }
+  return out;
+}
+
+void add_run(Cell &c, const RunResult &r, double run_s) {
+  c.score.add(r.score);
+  ++c.runs;
+  c.scans += r.scans;
+  c.observations += r.observations;
+  c.budget_hits += r.budget_hits;
+  c.landmarks += r.landmarks;
+  c.spurious_in_map += r.spurious_in_map;
+  c.removed_true += r.removed_true_landmarks;
+  c.assoc_s += r.association_s;
+  c.run_s += run_s;
+  c.abs_x += r.mean_abs_x_m;
+  c.abs_y += r.mean_abs_y_m;
+  if (c.nees_sum.size() < r.steps.size()) {
+    c.nees_sum.resize(r.steps.size(), 0.0);
+    c.ex_sum.resize(r.steps.size(), 0.0);
+    c.ey_sum.resize(r.steps.size(), 0.0);
+    c.t.resize(r.steps.size(), 0.0);
+  }
+  for (std::size_t k = 0; k < r.steps.size(); ++k) {
+    const StepRecord &s = r.steps[k];
+    c.nees_sum[k] += s.pose_nees;
+    c.ex_sum[k] += std::abs(s.estimate.x - s.truth.x);
+    c.ey_sum[k] += std::abs(s.estimate.y - s.truth.y);
+    c.t[k] = s.t_s;
+  }
+}
+
+int run_sim(const SimOptions &o) {
+  const std::vector<Strategy> strategies = parse_strategies(o.strategies);
+  std::vector<Scenario> scenarios;
+  for (const std::string &p : o.scenarios) scenarios.push_back(load_scenario(p));
+  fs::create_directories(o.out_dir);
+
+  struct Job {
+    int sc, st, run;
+  };
+  std::vector<Job> jobs;
+  for (int run = 0; run < o.runs; ++run)  // seed-major: a partial result is still balanced
+    for (std::size_t sc = 0; sc < scenarios.size(); ++sc)
+      for (std::size_t st = 0; st < strategies.size(); ++st) jobs.push_back({int(sc), int(st), run});
+  std::vector<std::vector<Cell>> cells(scenarios.size(), std::vector<Cell>(strategies.size()));
+  struct RunRow {
+    int sc, st, run;
+    RunResult r;
+    double run_s;
+  };
+  std::vector<std::string> csv_rows(jobs.size());
+  std::mutex mu;
+  const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const double wall_s = run_parallel(jobs.size(), threads, o.progress, [&](std::size_t j) {
+    const Job &jb = jobs[j];
+    RunOptions ro = o.run;
+    ro.strategy = strategies[jb.st];
+    const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(jb.run);
+    const auto a = std::chrono::steady_clock::now();
+    RunResult r;
+    std::string err;
+    try {
+      r = run_slam(scenarios[jb.sc], seed, ro);
+    } catch (const std::exception &e) {
+      err = e.what();
+    }
+    const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+    std::lock_guard<std::mutex> lock(mu);
+    Cell &c = cells[jb.sc][jb.st];
+    if (!err.empty()) {
+      ++c.failed;
+      c.error = err;
+    } else {
+      add_run(c, r, run_s);
+      std::ostringstream row;
+      row << csv_escape(scenarios[jb.sc].name) << ',' << to_string(strategies[jb.st]) << ',' << seed << ',' << r.scans
+          << ',' << r.observations << ',' << r.score.tp << ',' << r.score.tn << ',' << r.score.fp << ',' << r.score.fn
+          << ',' << r.score.f1() << ',' << r.association_s << ',' << run_s << ',' << r.mean_abs_x_m << ','
+          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits;
+      csv_rows[j] = row.str();
+      if (jb.run == 0) {
+        c.first = std::move(r);
+        c.have_first = true;
+      }
+    }
+  });
+
+  // Report.
+  nlohmann::json js;
+  js["runs_per_strategy"] = o.runs;
+  js["first_seed"] = o.seed;
+  js["threads"] = threads;
+  js["wall_s"] = wall_s;
+  int failures = 0;
+  double lo = 0, hi = 0;
+  const bool have_bounds =
+      chi2_inv(0.025, 3 * o.runs, lo) == Status::kOk && chi2_inv(0.975, 3 * o.runs, hi) == Status::kOk;
+  std::vector<std::vector<double>> f1(strategies.size(), std::vector<double>(scenarios.size(), NAN));
+  for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
+    const Scenario &s = scenarios[sc];
+    std::vector<ReportRow> rows;
+    for (std::size_t st = 0; st < strategies.size(); ++st) {
+      const Cell &c = cells[sc][st];
+      failures += c.failed;
+      ReportRow row;
+      row.name = to_string(strategies[st]);
+      row.runs = c.runs;
+      row.failed = c.failed;
+      row.error = c.error;
+      row.score = c.score;
+      row.scans = c.scans;
+      row.assoc_s = c.assoc_s;
+      row.run_s = c.run_s;
+      row.budget_hits = c.budget_hits;
+      row.abs_x = c.runs ? c.abs_x / c.runs : NAN;
+      row.abs_y = c.runs ? c.abs_y / c.runs : NAN;
+      row.landmarks = c.runs ? double(c.landmarks) / c.runs : NAN;
+      row.spurious_in_map = c.runs ? double(c.spurious_in_map) / c.runs : NAN;
+      // NEES: the mean over runs at each scan against its 95 % bounds for 3 x
+      // runs dof, and the average over the run.
+      if (c.runs > 0 && !c.nees_sum.empty()) {
+        double sum = 0;
+        int inside = 0;
+        double l = 0, h = 0;
+        const bool b = chi2_inv(0.025, 3 * c.runs, l) == Status::kOk && chi2_inv(0.975, 3 * c.runs, h) == Status::kOk;
+        for (double v : c.nees_sum) {
+          const double m = v / c.runs;
+          sum += m;
+          inside += b && m >= l / c.runs && m <= h / c.runs;
+        }
+        row.anees = sum / c.nees_sum.size();
+        row.nees_inside = double(inside) / c.nees_sum.size();
+        const long dof = 3L * c.runs * static_cast<long>(c.nees_sum.size());
+        row.anees_lo = chi2_quantile_wh(0.025, dof) / (double(c.runs) * c.nees_sum.size());
+        row.anees_hi = chi2_quantile_wh(0.975, dof) / (double(c.runs) * c.nees_sum.size());
+      }
+      f1[st][sc] = c.score.f1();
+      rows.push_back(row);
+    }
+    const int scans = cells[sc][0].runs ? cells[sc][0].scans / cells[sc][0].runs : 0;
+    std::printf("\n== %s: %d runs per strategy (seeds %llu..%llu), %d scans per run\n", s.name.c_str(), o.runs,
+                static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1), scans);
+    print_tables(rows, stdout);
+    js["scenarios"].push_back({{"name", s.name}, {"file", o.scenarios[sc]}, {"strategies", rows_json(rows)}});
+
+    if (o.svg) {
+      const std::string stem = o.out_dir + "/" + fs::path(o.scenarios[sc]).stem().string();
+      svg::Figure path;
+      path.title = "Path fitting, " + s.name + " (seed " + std::to_string(o.seed) + ")";
+      path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
+      svg::Figure err;
+      err.title = "Mean absolute pose error over " + std::to_string(o.runs) + " runs, " + s.name;
+      err.cols = 1;
+      err.panel_w = 900;
+      err.share_x = true;
+      err.panels.resize(2);
+      err.panels[0] = {"x error", "", "|x error| [m]", {}, false, {}, {}};
+      err.panels[1] = {"y error", "time [s]", "|y error| [m]", {}, false, {}, {}};
+      svg::Figure nees;
+      nees.title = "Pose NEES, mean over " + std::to_string(o.runs) + " runs: " + s.name;
+      nees.panel_w = 900;
+      nees.panels.resize(1);
+      nees.panels[0] = {"", "time [s]", "NEES (3 dof)", {}, false, {}, {}};
+      for (std::size_t st = 0; st < strategies.size(); ++st) {
+        const Cell &c = cells[sc][st];
+        if (!c.have_first) continue;
+        svg::Panel p;
+        p.title = to_string(strategies[st]);
+        p.xlabel = "x [m]";
+        p.ylabel = "y [m]";
+        p.equal_aspect = true;
+        svg::Series truth{"true path", {}, {}, svg::Style::kLine, "#000000"};
+        svg::Series est{"estimated path", {}, {}, svg::Style::kDashed, "#D55E00"};
+        for (const StepRecord &r : c.first.steps) {
+          truth.x.push_back(r.truth.x);
+          truth.y.push_back(r.truth.y);
+          est.x.push_back(r.estimate.x);
+          est.y.push_back(r.estimate.y);
+        }
+        svg::Series tl{"true landmarks", {}, {}, svg::Style::kMarkersCross, "#0072B2"};
+        for (const auto &l : s.landmarks) {
+          tl.x.push_back(l.x());
+          tl.y.push_back(l.y());
+        }
+        svg::Series el{"estimated landmarks", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
+        svg::Series sl{"spurious landmarks", {}, {}, svg::Style::kMarkersDot, "#CC79A7"};
+        for (const MapLandmark &m : c.first.map) {
+          (m.truth >= 0 ? el : sl).x.push_back(m.x);
+          (m.truth >= 0 ? el : sl).y.push_back(m.y);
+        }
+        p.series = {tl, truth, est, el, sl};
+        path.panels.push_back(p);
+        const std::string name = to_string(strategies[st]);
+        svg::Series sx{name, c.t, {}, svg::Style::kLine, ""}, sy{name, c.t, {}, svg::Style::kLine, ""};
+        svg::Series sn{name, c.t, {}, svg::Style::kLine, ""};
+        for (std::size_t k = 0; k < c.t.size(); ++k) {
+          sx.y.push_back(c.ex_sum[k] / c.runs);
+          sy.y.push_back(c.ey_sum[k] / c.runs);
+          sn.y.push_back(c.nees_sum[k] / c.runs);
+        }
+        err.panels[0].series.push_back(sx);
+        err.panels[1].series.push_back(sy);
+        nees.panels[0].series.push_back(sn);
+      }
+      if (have_bounds && !cells[sc][0].t.empty()) {
+        const auto &t = cells[sc][0].t;
+        nees.panels[0].series.push_back(
+            {"95 % bounds", t, std::vector<double>(t.size(), lo / o.runs), svg::Style::kDashed, "#000000"});
+        nees.panels[0].series.push_back(
+            {"", t, std::vector<double>(t.size(), hi / o.runs), svg::Style::kDashed, "#000000"});
+      }
+      svg::write(path, stem + "_path.svg");
+      svg::write(err, stem + "_error.svg");
+      svg::write(nees, stem + "_nees.svg");
+      std::printf("figures: %s_path.svg, %s_error.svg, %s_nees.svg\n", stem.c_str(), stem.c_str(), stem.c_str());
+    }
+  }
+  if (o.svg) {
+    svg::BarChart bars;
+    bars.title = "F1 per strategy (" + std::to_string(o.runs) + " runs each)";
+    bars.ylabel = "F1";
+    for (Strategy st : strategies) bars.categories.push_back(to_string(st));
+    for (const Scenario &s : scenarios) bars.groups.push_back(s.name.substr(0, s.name.find(':')));
+    bars.values.assign(scenarios.size(), std::vector<double>(strategies.size(), NAN));
+    double fmin = 1.0;
+    for (std::size_t st = 0; st < strategies.size(); ++st)
+      for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
+        bars.values[sc][st] = f1[st][sc];
+        if (std::isfinite(f1[st][sc])) fmin = std::min(fmin, f1[st][sc]);
+      }
+    bars.y_range = svg::Range{std::floor(fmin * 50 - 1) / 50, 1.0};
+    bars.value_decimals = 4;
+    svg::write(bars, o.out_dir + "/f1.svg");
+    std::printf("figure: %s/f1.svg\n", o.out_dir.c_str());
+  }
+  {
+    std::ofstream csv(o.out_dir + "/runs.csv");
+    csv << "scenario,strategy,seed,scans,observations,tp,tn,fp,fn,f1,"
+           "association_s,run_s,mean_abs_x_m,mean_abs_y_m,"
+           "landmarks,spurious_in_map,budget_hits\n";
+    for (const std::string &r : csv_rows)
+      if (!r.empty()) csv << r << '\n';
+    std::ofstream(o.out_dir + "/summary.json") << js.dump(2) << '\n';
+    if (!csv) throw std::runtime_error("cannot write " + o.out_dir + "/runs.csv");
+  }
+  std::printf(
+      "\n%zu runs in %.1f s on %d threads; per-run rows: %s/runs.csv, "
+      "summary: %s/summary.json\n",
+      jobs.size(), wall_s, threads, o.out_dir.c_str(), o.out_dir.c_str());
+  if (failures > 0) std::fprintf(stderr, "%d runs failed (see the tables)\n", failures);
+  return failures > 0 ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+  CLI::App app{
+      "geojcbb evaluation: EKF-SLAM with every association strategy, scored "
+      "against ground truth, "
+      "on simulated scenarios (sim) or the UTIAS MRCLAM real data (mrclam)."};
+  app.require_subcommand(1);
+  SimOptions so;
+  auto *sim = app.add_subcommand("sim",
+                                 "Monte Carlo runs over simulated scenarios: "
+                                 "Tables 1 and 2, pose error, NEES, figures");
+  sim->add_option("--scenario", so.scenarios,
+                  "scenario JSON file(s) (default: env1 and env2 from "
+                  "host_tools/scenarios)");
+  sim->add_option("--runs", so.runs,
+                  "Monte Carlo runs per scenario and strategy (seeds seed .. "
+                  "seed+runs-1)")
+      ->default_val(20)
+      ->check(CLI::Range(1, 100000));
+  sim->add_option("--seed", so.seed, "first seed")->default_val(1);
+  sim->add_option("--strategies", so.strategies,
+                  "strategies to run, comma separated "
+                  "(ICNN,JCBB,KJCBB,DFJCBB,GEMJCBB,GEOJCBB; default all)")
+      ->delimiter(',');
+  sim->add_option("--jobs", so.jobs,
+                  "worker threads (default: the number of cores; 1 gives the "
+                  "cleanest timing)")
+      ->check(CLI::Range(0, 256));
+  sim->add_option("--out-dir", so.out_dir, "directory for runs.csv, summary.json and the SVG figures")
+      ->default_val(so.out_dir);
+  sim->add_flag("!--no-svg", so.svg, "do not write the figures");
+  sim->add_flag("!--no-progress", so.progress, "no progress bar on stderr");
+  sim->add_option("--confidence", so.run.confidence, "chi-square level of the individual and joint gates")
+      ->default_val(0.99)
+      ->check(CLI::Range(0.5, 0.999999));
+  sim->add_option("--new-landmark-gate", so.run.new_landmark_gate,
+                  "chi-square level of the second gate an unpaired observation "
+                  "must pass to become a landmark")
+      ->default_val(0.999)
+      ->check(CLI::Range(0.5, 0.999999));
+  sim->add_option("--compensation", so.run.compensation_m,
+                  "d in the local region r + d [m] (r: the scenario's max range)")
+      ->default_val(5.0)
+      ->check(CLI::Range(0.0, 1000.0));
+  sim->add_option("--groups", so.run.groups, "K for KJCBB and GEMJCBB/GEOJCBB (0: GMM chooses K by BIC)")
+      ->default_val(3)
+      ->check(CLI::Range(0, 8));
+  sim->add_flag("--condition-groups", so.run.condition_groups,
+                "each group's JCBB starts from the earlier groups' pairings "
+                "(our addition)");
+  sim->add_option("--max-steps", so.run.max_steps,
+                  "stop each run after this many control intervals (0: the whole path)")
+      ->default_val(0);
+  sim->add_option("--confirm-hits", so.run.landmark_policy.confirm_hits,
+                  "pairings that confirm a tentative landmark (the first "
+                  "sighting counts)")
+      ->default_val(2)
+      ->check(CLI::Range(1, 255));
+  sim->add_option("--max-misses", so.run.landmark_policy.max_misses, "misses in view that remove a tentative landmark")
+      ->default_val(2)
+      ->check(CLI::Range(1, 255));
+
+  MrclamOptions mo;
+  std::string mo_out = "build/results/mrclam";
+  std::vector<std::string> mo_strategies;
+  bool mo_progress = true;
+  auto *mr = app.add_subcommand("mrclam",
+                                "replay the UTIAS MRCLAM datasets: every strategy on every "
+                                "robot, scored with the barcodes' ground truth");
+  mr->add_option("--data", mo.data_dir,
+                 "folder holding MRCLAM_Dataset6 and MRCLAM_Dataset7 (default: "
+                 "$GEOJCBB_MRCLAM_DIR, else ../shared/data/mrclam beside the repository)");
+  mr->add_option("--datasets", mo.datasets, "dataset numbers")->delimiter(',')->default_str("6,7");
+  mr->add_option("--robots", mo.robots, "robot numbers")->delimiter(',')->default_str("1,2,3,4,5");
+  mr->add_option("--strategies", mo_strategies, "strategies, comma separated (default all)")->delimiter(',');
+  mr->add_option("--out-dir", mo_out, "directory for mrclam.csv and mrclam.json")->default_val(mo_out);
+  mr->add_flag("!--no-progress", mo_progress, "no progress bar on stderr");
+  mr->add_option("--confidence", mo.run.confidence, "chi-square level of the gates")
+      ->default_val(mo.run.confidence)
+      ->check(CLI::Range(0.5, 0.999999));
+  mr->add_option("--new-landmark-gate", mo.run.new_landmark_gate, "chi-square level of the augmentation gate")
+      ->default_val(mo.run.new_landmark_gate)
+      ->check(CLI::Range(0.5, 0.999999));
+  mr->add_option("--sigma-range", mo.sigma_range_m,
+                 "range noise for R [m] (default: from the data, see docs/mrclam.md)");
+  mr->add_option("--sigma-bearing", mo.sigma_bearing_rad, "bearing noise for R [rad] (default: from the data)");
+  mr->add_option("--sigma-v", mo.sigma_v_mps,
+                 "odometry v noise, std of a 1-second mean [m/s] (default: "
+                 "from the data)");
+  mr->add_option("--sigma-w", mo.sigma_w_radps,
+                 "odometry w noise, std of a 1-second mean [rad/s] (default: "
+                 "from the data)");
+  mr->add_option("--noise-inflation", mo.noise_inflation, "factor on the data's robust noise spreads")
+      ->default_val(mo.noise_inflation)
+      ->check(CLI::Range(0.1, 100.0));
+  mr->add_flag("--drop-other-robots", mo.drop_other_robots,
+               "remove measurements of the other robots instead of feeding "
+               "them as clutter");
+  mr->add_option("--jobs", mo.jobs, "worker threads (default: the number of cores)")->check(CLI::Range(0, 256));
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (sim->parsed()) {
+      if (so.scenarios.empty()) {
+        so.scenarios = {std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json",
+                        std::string(GEOJCBB_SCENARIO_DIR) + "/env2.json"};
+      }
+      so.progress = so.progress && isatty(STDERR_FILENO);
+      return run_sim(so);
+    }
+    mo.strategies = parse_strategies(mo_strategies);
+    return run_mrclam_report(mo, mo_out, mo_progress && isatty(STDERR_FILENO));
+  } catch (const std::exception &e) {
+    std::fprintf(stderr, "geojcbb_eval: %s\n", e.what());
+    return 2;
+  }
+}

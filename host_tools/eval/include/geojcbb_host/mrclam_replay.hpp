@@ -1,0 +1,81 @@
+// host_tools/eval: EKF-SLAM on the UTIAS MRCLAM real data (docs/mrclam.md),
+// scored like the simulation. One run = one robot of one dataset with one
+// strategy:
+//   - start at the ground-truth pose at the first time both odometry and ground
+//   truth exist, so
+//     the map is in the Vicon frame and landmark and pose errors are read
+//     directly;
+//   - each odometry command (v, w) holds until the next sample (about 67 Hz); a
+//   scan at time t
+//     predicts up to t first. Across a gap in the log longer than kHoldLimit_s
+//     the command is held for kHoldLimit_s and the robot then assumed stopped
+//     (the log resumes with a stop command);
+//   - a scan is the measurements of one camera frame (mrclam::load_robot groups
+//   them); truth of a
+//     measurement: the landmark's index when its barcode maps to a landmark
+//     subject, else -1 (unknown barcodes and other robots are clutter);
+//   - R = diag(sigma_range^2, sigma_bearing^2) and the odometry noise come from
+//   the data unless
+//     given (MrclamNoise::from_data; how: docs/mrclam.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "geojcbb_host/mrclam.hpp"
+#include "geojcbb_host/slam_run.hpp"
+
+namespace geojcbb::host {
+
+constexpr double kHoldLimit_s = 0.25;
+/// MRCLAM's landmarks stand in clusters of two or three, 0.13 - 0.28 m apart:
+/// at the camera's range noise geometry cannot tell them apart. Landmarks
+/// within this distance form a group for the group-level score
+/// (docs/mrclam.md).
+constexpr double kLandmarkGroupRadius_m = 0.35;
+
+/// Landmark index -> group (connected components of landmarks within radius_m).
+std::vector<int> landmark_groups(const mrclam::Dataset &ds, double radius_m);
+
+/// Noise the filter assumes on MRCLAM. The odometry sigmas are rates: over dt
+/// the filter's (v, w) standard deviations are sigma * sqrt(1 s / dt), so the
+/// variance of a displacement grows with time and not with the number of
+/// samples.
+struct MrclamNoise {
+  double sigma_range_m = 0, sigma_bearing_rad = 0;
+  double sigma_v_mps = 0,
+         sigma_w_radps = 0;  ///< std of the 1-second mean of v and w
+  /// Robust (MAD) spreads of the measurement residuals and of the 1-second
+  /// odometry residuals of `robots`, each multiplied by `inflation`.
+  static MrclamNoise from_data(const mrclam::Dataset &ds, const std::vector<mrclam::RobotLog> &robots,
+                               double inflation);
+};
+
+/// The camera as the filter knows it (README: range 0.9 - 9.3 m, bearing within
+/// about +-0.6 rad).
+SensorModel mrclam_sensor(const MrclamNoise &n);
+
+/// One robot's replay. Throws std::runtime_error as run_slam does.
+/// drop_other_robots: measurements of robots (subjects 1-5) are removed before
+/// association instead of being fed as clutter.
+RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, const RunOptions &options,
+                       const MrclamNoise &noise, bool drop_other_robots = false);
+
+struct MrclamOptions {
+  std::string data_dir;  ///< empty: mrclam::default_data_dir()
+  std::vector<int> datasets{6, 7};
+  std::vector<int> robots{1, 2, 3, 4, 5};
+  std::vector<Strategy> strategies;
+  RunOptions run;
+  double sigma_range_m = 0, sigma_bearing_rad = 0;  ///< 0: from the data
+  double sigma_v_mps = 0, sigma_w_radps = 0;        ///< 0: from the data
+  double noise_inflation = 1.5;                     ///< on the data's robust spreads (their tails are heavy)
+  int jobs = 0;                                     ///< worker threads (0: the number of cores)
+  bool drop_other_robots = false;                   ///< see replay_robot
+};
+
+/// Every strategy on every robot of every dataset: tables on stdout, mrclam.csv
+/// and mrclam.json in out_dir. Returns the process exit code.
+int run_mrclam_report(const MrclamOptions &options, const std::string &out_dir, bool progress);
+
+}  // namespace geojcbb::host
