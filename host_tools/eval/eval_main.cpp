@@ -60,32 +60,33 @@ struct SimOptions {
   std::string out_dir = "build/results/eval";
   bool svg = true;
   bool progress = true;
+  bool oracle = false;
   RunOptions run;
 };
 
-std::vector<Strategy> parse_strategies(const std::vector<std::string> &names) {
-  std::vector<Strategy> out;
+std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool oracle) {
+  std::vector<Method> out;
   if (names.empty()) {
-    for (int k = 0; k < kStrategyCount; ++k) out.push_back(static_cast<Strategy>(k));
-    return out;
+    for (int k = 0; k < kStrategyCount; ++k) out.push_back({static_cast<Strategy>(k), false});
   }
-  for (const std::string &n : names) {
+  for (const std::string& n : names) {
     bool found = false;
     for (int k = 0; k < kStrategyCount && !found; ++k) {
       std::string a = to_string(static_cast<Strategy>(k)), b = n;
       std::transform(a.begin(), a.end(), a.begin(), ::tolower);
       std::transform(b.begin(), b.end(), b.begin(), ::tolower);
       if (a == b) {
-        out.push_back(static_cast<Strategy>(k));
+        out.push_back({static_cast<Strategy>(k), false});
         found = true;
       }
     }
     if (!found) throw std::runtime_error("unknown strategy '" + n + "'");
   }
+  if (oracle) out.push_back({Strategy::kJcbb, true});
   return out;
 }
 
-void add_run(Cell &c, const RunResult &r, double run_s) {
+void add_run(Cell& c, const RunResult& r, double run_s) {
   c.score.add(r.score);
   ++c.runs;
   c.scans += r.scans;
@@ -105,7 +106,7 @@ void add_run(Cell &c, const RunResult &r, double run_s) {
     c.t.resize(r.steps.size(), 0.0);
   }
   for (std::size_t k = 0; k < r.steps.size(); ++k) {
-    const StepRecord &s = r.steps[k];
+    const StepRecord& s = r.steps[k];
     c.nees_sum[k] += s.pose_nees;
     c.ex_sum[k] += std::abs(s.estimate.x - s.truth.x);
     c.ey_sum[k] += std::abs(s.estimate.y - s.truth.y);
@@ -113,10 +114,10 @@ void add_run(Cell &c, const RunResult &r, double run_s) {
   }
 }
 
-int run_sim(const SimOptions &o) {
-  const std::vector<Strategy> strategies = parse_strategies(o.strategies);
+int run_sim(const SimOptions& o) {
+  const std::vector<Method> strategies = parse_strategies(o.strategies, o.oracle);
   std::vector<Scenario> scenarios;
-  for (const std::string &p : o.scenarios) scenarios.push_back(load_scenario(p));
+  for (const std::string& p : o.scenarios) scenarios.push_back(load_scenario(p));
   fs::create_directories(o.out_dir);
 
   struct Job {
@@ -136,28 +137,28 @@ int run_sim(const SimOptions &o) {
   std::mutex mu;
   const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, o.progress, [&](std::size_t j) {
-    const Job &jb = jobs[j];
+    const Job& jb = jobs[j];
     RunOptions ro = o.run;
-    ro.strategy = strategies[jb.st];
+    strategies[jb.st].apply(ro);
     const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(jb.run);
     const auto a = std::chrono::steady_clock::now();
     RunResult r;
     std::string err;
     try {
       r = run_slam(scenarios[jb.sc], seed, ro);
-    } catch (const std::exception &e) {
+    } catch (const std::exception& e) {
       err = e.what();
     }
     const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
     std::lock_guard<std::mutex> lock(mu);
-    Cell &c = cells[jb.sc][jb.st];
+    Cell& c = cells[jb.sc][jb.st];
     if (!err.empty()) {
       ++c.failed;
       c.error = err;
     } else {
       add_run(c, r, run_s);
       std::ostringstream row;
-      row << csv_escape(scenarios[jb.sc].name) << ',' << to_string(strategies[jb.st]) << ',' << seed << ',' << r.scans
+      row << csv_escape(scenarios[jb.sc].name) << ',' << strategies[jb.st].name() << ',' << seed << ',' << r.scans
           << ',' << r.observations << ',' << r.score.tp << ',' << r.score.tn << ',' << r.score.fp << ',' << r.score.fn
           << ',' << r.score.f1() << ',' << r.association_s << ',' << run_s << ',' << r.mean_abs_x_m << ','
           << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits;
@@ -181,13 +182,13 @@ int run_sim(const SimOptions &o) {
       chi2_inv(0.025, 3 * o.runs, lo) == Status::kOk && chi2_inv(0.975, 3 * o.runs, hi) == Status::kOk;
   std::vector<std::vector<double>> f1(strategies.size(), std::vector<double>(scenarios.size(), NAN));
   for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
-    const Scenario &s = scenarios[sc];
+    const Scenario& s = scenarios[sc];
     std::vector<ReportRow> rows;
     for (std::size_t st = 0; st < strategies.size(); ++st) {
-      const Cell &c = cells[sc][st];
+      const Cell& c = cells[sc][st];
       failures += c.failed;
       ReportRow row;
-      row.name = to_string(strategies[st]);
+      row.name = strategies[st].name();
       row.runs = c.runs;
       row.failed = c.failed;
       row.error = c.error;
@@ -246,35 +247,35 @@ int run_sim(const SimOptions &o) {
       nees.panels.resize(1);
       nees.panels[0] = {"", "time [s]", "NEES (3 dof)", {}, false, {}, {}};
       for (std::size_t st = 0; st < strategies.size(); ++st) {
-        const Cell &c = cells[sc][st];
+        const Cell& c = cells[sc][st];
         if (!c.have_first) continue;
         svg::Panel p;
-        p.title = to_string(strategies[st]);
+        p.title = strategies[st].name();
         p.xlabel = "x [m]";
         p.ylabel = "y [m]";
         p.equal_aspect = true;
         svg::Series truth{"true path", {}, {}, svg::Style::kLine, "#000000"};
         svg::Series est{"estimated path", {}, {}, svg::Style::kDashed, "#D55E00"};
-        for (const StepRecord &r : c.first.steps) {
+        for (const StepRecord& r : c.first.steps) {
           truth.x.push_back(r.truth.x);
           truth.y.push_back(r.truth.y);
           est.x.push_back(r.estimate.x);
           est.y.push_back(r.estimate.y);
         }
         svg::Series tl{"true landmarks", {}, {}, svg::Style::kMarkersCross, "#0072B2"};
-        for (const auto &l : s.landmarks) {
+        for (const auto& l : s.landmarks) {
           tl.x.push_back(l.x());
           tl.y.push_back(l.y());
         }
         svg::Series el{"estimated landmarks", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
         svg::Series sl{"spurious landmarks", {}, {}, svg::Style::kMarkersDot, "#CC79A7"};
-        for (const MapLandmark &m : c.first.map) {
+        for (const MapLandmark& m : c.first.map) {
           (m.truth >= 0 ? el : sl).x.push_back(m.x);
           (m.truth >= 0 ? el : sl).y.push_back(m.y);
         }
         p.series = {tl, truth, est, el, sl};
         path.panels.push_back(p);
-        const std::string name = to_string(strategies[st]);
+        const std::string name = strategies[st].name();
         svg::Series sx{name, c.t, {}, svg::Style::kLine, ""}, sy{name, c.t, {}, svg::Style::kLine, ""};
         svg::Series sn{name, c.t, {}, svg::Style::kLine, ""};
         for (std::size_t k = 0; k < c.t.size(); ++k) {
@@ -287,7 +288,7 @@ int run_sim(const SimOptions &o) {
         nees.panels[0].series.push_back(sn);
       }
       if (have_bounds && !cells[sc][0].t.empty()) {
-        const auto &t = cells[sc][0].t;
+        const auto& t = cells[sc][0].t;
         nees.panels[0].series.push_back(
             {"95 % bounds", t, std::vector<double>(t.size(), lo / o.runs), svg::Style::kDashed, "#000000"});
         nees.panels[0].series.push_back(
@@ -303,8 +304,8 @@ int run_sim(const SimOptions &o) {
     svg::BarChart bars;
     bars.title = "F1 per strategy (" + std::to_string(o.runs) + " runs each)";
     bars.ylabel = "F1";
-    for (Strategy st : strategies) bars.categories.push_back(to_string(st));
-    for (const Scenario &s : scenarios) bars.groups.push_back(s.name.substr(0, s.name.find(':')));
+    for (const Method& st : strategies) bars.categories.push_back(st.name());
+    for (const Scenario& s : scenarios) bars.groups.push_back(s.name.substr(0, s.name.find(':')));
     bars.values.assign(scenarios.size(), std::vector<double>(strategies.size(), NAN));
     double fmin = 1.0;
     for (std::size_t st = 0; st < strategies.size(); ++st)
@@ -322,7 +323,7 @@ int run_sim(const SimOptions &o) {
     csv << "scenario,strategy,seed,scans,observations,tp,tn,fp,fn,f1,"
            "association_s,run_s,mean_abs_x_m,mean_abs_y_m,"
            "landmarks,spurious_in_map,budget_hits\n";
-    for (const std::string &r : csv_rows)
+    for (const std::string& r : csv_rows)
       if (!r.empty()) csv << r << '\n';
     std::ofstream(o.out_dir + "/summary.json") << js.dump(2) << '\n';
     if (!csv) throw std::runtime_error("cannot write " + o.out_dir + "/runs.csv");
@@ -337,14 +338,14 @@ int run_sim(const SimOptions &o) {
 
 }  // namespace
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   CLI::App app{
       "geojcbb evaluation: EKF-SLAM with every association strategy, scored "
       "against ground truth, "
       "on simulated scenarios (sim) or the UTIAS MRCLAM real data (mrclam)."};
   app.require_subcommand(1);
   SimOptions so;
-  auto *sim = app.add_subcommand("sim",
+  auto* sim = app.add_subcommand("sim",
                                  "Monte Carlo runs over simulated scenarios: "
                                  "Tables 1 and 2, pose error, NEES, figures");
   sim->add_option("--scenario", so.scenarios,
@@ -386,6 +387,9 @@ int main(int argc, char **argv) {
   sim->add_flag("--condition-groups", so.run.condition_groups,
                 "each group's JCBB starts from the earlier groups' pairings "
                 "(our addition)");
+  sim->add_flag("--truth", so.oracle,
+                "add a row TRUTH: association by ground truth (gated at chi2(0.999, 2)), the filter's own accuracy "
+                "with perfect association");
   sim->add_option("--max-steps", so.run.max_steps,
                   "stop each run after this many control intervals (0: the whole path)")
       ->default_val(0);
@@ -402,7 +406,8 @@ int main(int argc, char **argv) {
   std::string mo_out = "build/results/mrclam";
   std::vector<std::string> mo_strategies;
   bool mo_progress = true;
-  auto *mr = app.add_subcommand("mrclam",
+  bool mo_oracle = false;
+  auto* mr = app.add_subcommand("mrclam",
                                 "replay the UTIAS MRCLAM datasets: every strategy on every "
                                 "robot, scored with the barcodes' ground truth");
   mr->add_option("--data", mo.data_dir,
@@ -431,6 +436,9 @@ int main(int argc, char **argv) {
   mr->add_option("--noise-inflation", mo.noise_inflation, "factor on the data's robust noise spreads")
       ->default_val(mo.noise_inflation)
       ->check(CLI::Range(0.1, 100.0));
+  mr->add_flag(
+      "--truth", mo_oracle,
+      "add a row TRUTH: association by ground truth (gated), the filter's own accuracy with perfect association");
   mr->add_flag("--drop-other-robots", mo.drop_other_robots,
                "remove measurements of the other robots instead of feeding "
                "them as clutter");
@@ -446,9 +454,9 @@ int main(int argc, char **argv) {
       so.progress = so.progress && isatty(STDERR_FILENO);
       return run_sim(so);
     }
-    mo.strategies = parse_strategies(mo_strategies);
+    mo.strategies = parse_strategies(mo_strategies, mo_oracle);
     return run_mrclam_report(mo, mo_out, mo_progress && isatty(STDERR_FILENO));
-  } catch (const std::exception &e) {
+  } catch (const std::exception& e) {
     std::fprintf(stderr, "geojcbb_eval: %s\n", e.what());
     return 2;
   }

@@ -16,7 +16,7 @@
 
 namespace geojcbb::host {
 
-MrclamNoise MrclamNoise::from_data(const mrclam::Dataset &ds, const std::vector<mrclam::RobotLog> &robots,
+MrclamNoise MrclamNoise::from_data(const mrclam::Dataset& ds, const std::vector<mrclam::RobotLog>& robots,
                                    double inflation) {
   const mrclam::MeasurementNoise m = mrclam::estimate_measurement_noise(ds, robots);
   const mrclam::OdometryNoise o = mrclam::estimate_odometry_noise(robots, 1.0);
@@ -28,10 +28,10 @@ MrclamNoise MrclamNoise::from_data(const mrclam::Dataset &ds, const std::vector<
   return n;
 }
 
-SensorModel mrclam_sensor(const MrclamNoise &n) { return SensorModel{0.9, 9.3, 1.2, n.sigma_bearing_rad}; }
+SensorModel mrclam_sensor(const MrclamNoise& n) { return SensorModel{0.9, 9.3, 1.2, n.sigma_bearing_rad}; }
 
-RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, const RunOptions &opt,
-                       const MrclamNoise &noise, bool drop_other_robots) {
+RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& opt,
+                       const MrclamNoise& noise, bool drop_other_robots) {
   if (log.odometry.size() < 2 || log.truth.empty()) throw std::runtime_error("robot log without odometry or truth");
   // Start where both odometry and ground truth exist.
   std::size_t i = 0;
@@ -64,7 +64,7 @@ RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, c
     }
   };
   std::vector<SimObservation> obs;
-  for (const mrclam::Scan &scan : log.scans) {
+  for (const mrclam::Scan& scan : log.scans) {
     if (scan.t < t) continue;  // before the start
     while (i + 1 < log.odometry.size() && log.odometry[i + 1].t <= scan.t) {
       advance(log.odometry[i + 1].t);
@@ -72,7 +72,7 @@ RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, c
     }
     advance(scan.t);
     obs.clear();
-    for (const mrclam::Measurement &m : scan.z) {
+    for (const mrclam::Measurement& m : scan.z) {
       if (drop_other_robots && m.subject >= 1 && m.subject <= mrclam::kRobots) continue;
       const int truth =
           m.subject >= 0 && m.subject < static_cast<int>(index_of_subject.size()) ? index_of_subject[m.subject] : -1;
@@ -86,7 +86,7 @@ RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, c
   return session.finish();
 }
 
-std::vector<int> landmark_groups(const mrclam::Dataset &ds, double radius_m) {
+std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
   const std::size_t n = ds.landmarks.size();
   std::vector<int> g(n);
   for (std::size_t a = 0; a < n; ++a) g[a] = static_cast<int>(a);
@@ -104,7 +104,7 @@ std::vector<int> landmark_groups(const mrclam::Dataset &ds, double radius_m) {
   return g;
 }
 
-int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool progress) {
+int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool progress) {
   const std::string root = o.data_dir.empty() ? mrclam::default_data_dir() : o.data_dir;
   std::filesystem::create_directories(out_dir);
   struct DatasetData {
@@ -138,14 +138,14 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
       for (std::size_t s = 0; s < o.strategies.size(); ++s) jobs.push_back({d, r, s, {}, 0, {}});
   const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, progress, [&](std::size_t j) {
-    Job &jb = jobs[j];
+    Job& jb = jobs[j];
     RunOptions ro = o.run;
-    ro.strategy = o.strategies[jb.s];
+    o.strategies[jb.s].apply(ro);
     ro.landmark_group = landmark_groups(data[jb.d].ds, kLandmarkGroupRadius_m);
     const auto a = std::chrono::steady_clock::now();
     try {
       jb.res = replay_robot(data[jb.d].ds, data[jb.d].logs[jb.r], ro, data[jb.d].noise, o.drop_other_robots);
-    } catch (const std::exception &e) {
+    } catch (const std::exception& e) {
       jb.error = e.what();
     }
     jb.run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
@@ -158,7 +158,7 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
          "recall,f1,association_s,run_s,"
          "mean_abs_x_m,mean_abs_y_m,landmarks,spurious_in_map,error\n";
   for (std::size_t d = 0; d < data.size(); ++d) {
-    const DatasetData &dd = data[d];
+    const DatasetData& dd = data[d];
     std::printf(
         "\n== MRCLAM_Dataset%d: R from the data: sigma_range %.4f m, "
         "sigma_bearing %.4f rad; odometry "
@@ -169,21 +169,21 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
         "F1 per robot (landmark / landmark group: landmarks within "
         "%.2f m form a group)\n  %-6s",
         kLandmarkGroupRadius_m, "robot");
-    for (Strategy s : o.strategies) std::printf(" %11s", to_string(s));
+    for (const Method& s : o.strategies) std::printf(" %11s", s.name());
     std::printf("   winner\n");
     std::vector<ReportRow> rows(o.strategies.size());
-    for (std::size_t s = 0; s < o.strategies.size(); ++s) rows[s].name = to_string(o.strategies[s]);
+    for (std::size_t s = 0; s < o.strategies.size(); ++s) rows[s].name = o.strategies[s].name();
     std::vector<ReportRow> group_rows = rows;
     for (std::size_t r = 0; r < dd.logs.size(); ++r) {
       std::printf("  %-6d", dd.logs[r].robot);
       double best = -1;
       std::string winner;
       for (std::size_t s = 0; s < o.strategies.size(); ++s) {
-        const Job &jb =
-            *std::find_if(jobs.begin(), jobs.end(), [&](const Job &x) { return x.d == d && x.r == r && x.s == s; });
-        ReportRow &row = rows[s];
+        const Job& jb =
+            *std::find_if(jobs.begin(), jobs.end(), [&](const Job& x) { return x.d == d && x.r == r && x.s == s; });
+        ReportRow& row = rows[s];
         std::ostringstream line;
-        line << dd.number << ',' << dd.logs[r].robot << ',' << to_string(o.strategies[s]) << ',';
+        line << dd.number << ',' << dd.logs[r].robot << ',' << o.strategies[s].name() << ',';
         if (!jb.error.empty()) {
           ++failures;
           ++row.failed;
@@ -192,14 +192,16 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
           csv << line.str() << ",,,,,,,,,,,,,,," << csv_escape(jb.error) << '\n';
           continue;
         }
-        const RunResult &res = jb.res;
+        const RunResult& res = jb.res;
         const double f1 = res.score.f1();
         std::printf("   %.3f/%.3f", f1, res.group_score.f1());
-        if (f1 > best + 1e-12) {
+        if (o.strategies[s].oracle) {
+          // not a contender
+        } else if (f1 > best + 1e-12) {
           best = f1;
-          winner = to_string(o.strategies[s]);
+          winner = o.strategies[s].name();
         } else if (std::abs(f1 - best) <= 1e-12) {
-          winner += "=" + std::string(to_string(o.strategies[s]));
+          winner += "=" + std::string(o.strategies[s].name());
         }
         row.score.add(res.score);
         group_rows[s].score.add(res.group_score);
@@ -215,7 +217,7 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
         row.landmarks = (std::isnan(row.landmarks) ? 0 : row.landmarks) + res.landmarks;
         row.spurious_in_map = (std::isnan(row.spurious_in_map) ? 0 : row.spurious_in_map) + res.spurious_in_map;
         double nees = 0;
-        for (const StepRecord &st : res.steps) nees += st.pose_nees;
+        for (const StepRecord& st : res.steps) nees += st.pose_nees;
         row.anees = (std::isnan(row.anees) ? 0 : row.anees) + (res.steps.empty() ? 0 : nees / res.steps.size());
         line << res.scans << ',' << res.observations << ',' << res.score.tp << ',' << res.score.tn << ','
              << res.score.fp << ',' << res.score.fn << ',' << res.score.precision() << ',' << res.score.recall() << ','
@@ -225,7 +227,7 @@ int run_mrclam_report(const MrclamOptions &o, const std::string &out_dir, bool p
       }
       std::printf("   %s\n", winner.c_str());
     }
-    for (ReportRow &row : rows) {
+    for (ReportRow& row : rows) {
       if (row.runs == 0) continue;
       row.abs_x /= row.runs;
       row.abs_y /= row.runs;

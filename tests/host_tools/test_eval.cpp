@@ -81,8 +81,8 @@ TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
   o.landmark_group = g;
   const RunResult r = replay_robot(ds, logs[0], o, noise);
   std::size_t measurements = 0;
-  for (const mrclam::Scan &s : logs[0].scans) measurements += s.z.size();
-  const Score &a = r.score;
+  for (const mrclam::Scan& s : logs[0].scans) measurements += s.z.size();
+  const Score& a = r.score;
   CHECK(a.tp + a.tn + a.fp + a.fn == r.observations);
   CHECK(r.observations <= static_cast<int>(measurements));
   CHECK(r.observations > static_cast<int>(measurements) * 9 / 10);  // only scans before the start are skipped

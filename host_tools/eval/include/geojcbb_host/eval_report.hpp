@@ -34,7 +34,7 @@ struct ReportRow {
                              ///< inside its 95 % bounds
 };
 
-inline double accuracy(const Score &s) {
+inline double accuracy(const Score& s) {
   const int n = s.tp + s.tn + s.fp + s.fn;
   return n == 0 ? 1.0 : double(s.tp + s.tn) / n;
 }
@@ -70,29 +70,29 @@ inline double chi2_quantile_wh(double p, long k) {
   return k * std::pow(1 - h + z * std::sqrt(h), 3);
 }
 
-inline std::string csv_escape(const std::string &s) {
+inline std::string csv_escape(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
   std::string o = "\"";
   for (char ch : s) o += ch == '"' ? std::string("\"\"") : std::string(1, ch);
   return o + "\"";
 }
 
-inline void print_accuracy(const std::vector<ReportRow> &rows, std::FILE *f) {
+inline void print_accuracy(const std::vector<ReportRow>& rows, std::FILE* f) {
   std::fprintf(f, "  %-8s %8s %7s %6s %6s %10s %8s %8s %9s\n", "strategy", "TP", "TN", "FP", "FN", "precision",
                "recall", "F1", "accuracy");
-  for (const ReportRow &r : rows) {
+  for (const ReportRow& r : rows) {
     if (r.runs == 0) continue;
-    const Score &s = r.score;
+    const Score& s = r.score;
     std::fprintf(f, "  %-8s %8d %7d %6d %6d %10.4f %8.4f %8.4f %9.4f\n", r.name.c_str(), s.tp, s.tn, s.fp, s.fn,
                  s.precision(), s.recall(), s.f1(), accuracy(s));
   }
 }
 
-inline void print_tables(const std::vector<ReportRow> &rows, std::FILE *f) {
+inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f) {
   std::fprintf(f, "Table 1: association time\n");
   std::fprintf(f, "  %-8s %6s %16s %16s %12s %12s\n", "strategy", "runs", "per scan [ms]", "per run [s]", "run [s]",
                "budget hits");
-  for (const ReportRow &r : rows) {
+  for (const ReportRow& r : rows) {
     if (r.runs == 0) {
       std::fprintf(f, "  %-8s %6d   all runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());
       continue;
@@ -105,24 +105,26 @@ inline void print_tables(const std::vector<ReportRow> &rows, std::FILE *f) {
   std::fprintf(f, "Pose and map (means over the runs)\n");
   std::fprintf(f, "  %-8s %10s %10s %10s %18s %12s %10s %10s\n", "strategy", "|x err| m", "|y err| m", "ANEES",
                "ANEES 95% bounds", "scans in b.", "landmarks", "spurious");
-  for (const ReportRow &r : rows) {
+  for (const ReportRow& r : rows) {
     if (r.runs == 0) continue;
-    std::fprintf(f,
-                 "  %-8s %10.4f %10.4f %10.3f    [%5.3f, %5.3f] %11.1f%% "
-                 "%10.1f %10.1f\n",
-                 r.name.c_str(), r.abs_x, r.abs_y, r.anees, r.anees_lo, r.anees_hi, 100 * r.nees_inside, r.landmarks,
-                 r.spurious_in_map);
+    char bounds[32] = "               -", inside[16] = "          -";
+    if (std::isfinite(r.anees_lo) && std::isfinite(r.anees_hi)) {
+      std::snprintf(bounds, sizeof bounds, "  [%5.3f, %5.3f]", r.anees_lo, r.anees_hi);
+    }
+    if (std::isfinite(r.nees_inside)) std::snprintf(inside, sizeof inside, "%10.1f%%", 100 * r.nees_inside);
+    std::fprintf(f, "  %-8s %10.4f %10.4f %10.3f %18s %12s %10.1f %10.1f\n", r.name.c_str(), r.abs_x, r.abs_y, r.anees,
+                 bounds, inside, r.landmarks, r.spurious_in_map);
   }
-  for (const ReportRow &r : rows) {
+  for (const ReportRow& r : rows) {
     if (r.failed > 0) std::fprintf(f, "  %s: %d runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());
   }
 }
 
-inline nlohmann::json rows_json(const std::vector<ReportRow> &rows) {
+inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
   nlohmann::json a = nlohmann::json::array();
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  for (const ReportRow &r : rows) {
-    const Score &s = r.score;
+  for (const ReportRow& r : rows) {
+    const Score& s = r.score;
     a.push_back({{"strategy", r.name},
                  {"runs", r.runs},
                  {"failed", r.failed},
@@ -179,7 +181,7 @@ class ProgressBar {
 /// progress bar. job must be safe to call concurrently for different indices.
 /// Returns the wall time [s].
 template <class Job>
-double run_parallel(std::size_t count, int threads, bool progress, Job &&job) {
+double run_parallel(std::size_t count, int threads, bool progress, Job&& job) {
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::atomic<std::size_t> next{0}, done{0};
   const auto t0 = std::chrono::steady_clock::now();
@@ -197,7 +199,7 @@ double run_parallel(std::size_t count, int threads, bool progress, Job &&job) {
     bar.show(done.load());
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  for (std::thread &t : pool) t.join();
+  for (std::thread& t : pool) t.join();
   bar.finish();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

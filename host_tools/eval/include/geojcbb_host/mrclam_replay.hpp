@@ -35,7 +35,7 @@ constexpr double kHoldLimit_s = 0.25;
 constexpr double kLandmarkGroupRadius_m = 0.35;
 
 /// Landmark index -> group (connected components of landmarks within radius_m).
-std::vector<int> landmark_groups(const mrclam::Dataset &ds, double radius_m);
+std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m);
 
 /// Noise the filter assumes on MRCLAM. The odometry sigmas are rates: over dt
 /// the filter's (v, w) standard deviations are sigma * sqrt(1 s / dt), so the
@@ -47,25 +47,25 @@ struct MrclamNoise {
          sigma_w_radps = 0;  ///< std of the 1-second mean of v and w
   /// Robust (MAD) spreads of the measurement residuals and of the 1-second
   /// odometry residuals of `robots`, each multiplied by `inflation`.
-  static MrclamNoise from_data(const mrclam::Dataset &ds, const std::vector<mrclam::RobotLog> &robots,
+  static MrclamNoise from_data(const mrclam::Dataset& ds, const std::vector<mrclam::RobotLog>& robots,
                                double inflation);
 };
 
 /// The camera as the filter knows it (README: range 0.9 - 9.3 m, bearing within
 /// about +-0.6 rad).
-SensorModel mrclam_sensor(const MrclamNoise &n);
+SensorModel mrclam_sensor(const MrclamNoise& n);
 
 /// One robot's replay. Throws std::runtime_error as run_slam does.
 /// drop_other_robots: measurements of robots (subjects 1-5) are removed before
 /// association instead of being fed as clutter.
-RunResult replay_robot(const mrclam::Dataset &ds, const mrclam::RobotLog &log, const RunOptions &options,
-                       const MrclamNoise &noise, bool drop_other_robots = false);
+RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& options,
+                       const MrclamNoise& noise, bool drop_other_robots = false);
 
 struct MrclamOptions {
   std::string data_dir;  ///< empty: mrclam::default_data_dir()
   std::vector<int> datasets{6, 7};
   std::vector<int> robots{1, 2, 3, 4, 5};
-  std::vector<Strategy> strategies;
+  std::vector<Method> strategies;
   RunOptions run;
   double sigma_range_m = 0, sigma_bearing_rad = 0;  ///< 0: from the data
   double sigma_v_mps = 0, sigma_w_radps = 0;        ///< 0: from the data
@@ -76,6 +76,6 @@ struct MrclamOptions {
 
 /// Every strategy on every robot of every dataset: tables on stdout, mrclam.csv
 /// and mrclam.json in out_dir. Returns the process exit code.
-int run_mrclam_report(const MrclamOptions &options, const std::string &out_dir, bool progress);
+int run_mrclam_report(const MrclamOptions& options, const std::string& out_dir, bool progress);
 
 }  // namespace geojcbb::host

@@ -43,11 +43,25 @@ struct RunOptions {
   /// too close together for geometry to tell apart share a group). Empty:
   /// group_score equals score.
   std::vector<int> landmark_group;
+  /// Pair by ground truth instead of running the strategy (gated at chi2(0.999, 2)): the filter's
+  /// own accuracy with perfect association, a reference for the strategies.
+  bool oracle = false;
 };
 
 struct MapLandmark {
   double x, y;
   int truth;  ///< true landmark index, or -1 when made from clutter
+};
+
+/// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
+struct Method {
+  Strategy strategy = Strategy::kGeojcbb;
+  bool oracle = false;
+  const char* name() const { return oracle ? "TRUTH" : to_string(strategy); }
+  void apply(RunOptions& o) const {
+    o.strategy = strategy;
+    o.oracle = oracle;
+  }
 };
 
 struct StepRecord {
@@ -91,29 +105,30 @@ struct SensorModel {
 /// or a library call fails (the message names the call and its status).
 class SlamSession {
  public:
-  SlamSession(const RunOptions &options, const SensorModel &sensor, std::size_t true_landmarks, const Pose2<double> &x0,
-              const Eigen::Matrix3d &P0);
+  SlamSession(const RunOptions& options, const SensorModel& sensor, std::size_t true_landmarks, const Pose2<double>& x0,
+              const Eigen::Matrix3d& P0);
   ~SlamSession();
-  SlamSession(const SlamSession &) = delete;
-  SlamSession &operator=(const SlamSession &) = delete;
+  SlamSession(const SlamSession&) = delete;
+  SlamSession& operator=(const SlamSession&) = delete;
 
   void predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps);
   /// One scan; each observation's truth is a landmark index < true_landmarks,
   /// or -1 for clutter. `truth` is the true pose at the scan, for the pose
   /// error and NEES (nullptr: not recorded).
-  void scan(std::vector<SimObservation> observations, const Eigen::Matrix2d &R, double t_s, const Pose2<double> *truth);
+  void scan(std::vector<SimObservation> observations, const Eigen::Matrix2d& R, double t_s, const Pose2<double>* truth);
   Pose2<double> pose() const;
   /// The result so far; finish() adds the final map and the means.
   RunResult finish();
 
- private:
   struct State;
+
+ private:
   std::unique_ptr<State> st_;
 };
 
 /// Runs one seed of one scenario. Throws std::runtime_error when the map
 /// capacity is exceeded or a library call fails (the message names the call and
 /// its status).
-RunResult run_slam(const Scenario &scenario, std::uint64_t seed, const RunOptions &options);
+RunResult run_slam(const Scenario& scenario, std::uint64_t seed, const RunOptions& options);
 
 }  // namespace geojcbb::host
