@@ -8,8 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "geojcbb/associate.hpp"
-#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/slam_step.hpp"
 
 namespace geojcbb::host {
 
@@ -24,16 +23,11 @@ void check(Status s, const char* what) {
 }  // namespace
 
 struct SlamSession::State {
-  ekf::Slam<double, EB> slam;
-  ekf::Workspace<double, EB> ekf_ws;
+  node::SlamStep<double, EB> step;
   Observations<double, EB> obs;
-  Prediction<double, EB> pred;
-  Workspace<double, EB> ws;
   Association<double, EB> out;
-  AssociationConfig<double, EB> cfg;
+  node::StepResult<double, EB> result;
   RunOptions opt;
-  ekf::Visibility<double> view;  // where a mapped landmark is expected: the sensor's view, shrunk
-  double second_gate = 0;
   std::vector<int> feature_truth;   // landmark id -> true landmark it came from (-1 clutter)
   std::vector<int> mapped;          // true landmark -> map landmarks made from it
   std::vector<int> landmark_group;  // true landmark -> its group (empty: each its own)
@@ -56,13 +50,14 @@ static void oracle_associate(SlamSession::State& s, const std::vector<SimObserva
     double best_d2 = std::numeric_limits<double>::infinity(), nearest = best_d2;
     FeatureId best = kNewFeature;
     int best_hits = -1;
-    for (int a = 0; a < s.pred.count; ++a) {
-      const Eigen::Matrix2d S = s.pred.C.block<2, 2>(2 * a, 2 * a) + s.obs.R[i];
-      const Eigen::Vector2d nu = innovation(s.obs.z[i], s.pred.h[a]);
+    const Prediction<double, EB>& pred = s.step.prediction();
+    for (int a = 0; a < pred.count; ++a) {
+      const Eigen::Matrix2d S = pred.C.block<2, 2>(2 * a, 2 * a) + s.obs.R[i];
+      const Eigen::Vector2d nu = innovation(s.obs.z[i], pred.h[a]);
       const double d2 = nu.dot(S.ldlt().solve(nu));
       nearest = std::min(nearest, d2);
-      const FeatureId id = s.pred.id[a];
-      const int hits = s.slam.hits(s.slam.index_of(id));
+      const FeatureId id = pred.id[a];
+      const int hits = s.step.slam().hits(s.step.slam().index_of(id));
       if (t >= 0 && s.feature_truth[id] == t && d2 < gate && hits > best_hits) {
         best = id;
         best_d2 = d2;
@@ -79,30 +74,32 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
     : st_(std::make_unique<State>()) {
   State& s = *st_;
   s.opt = opt;
-  StrategyParams<double> sp;
-  sp.confidence = opt.confidence;
-  sp.local_radius_m = sensor.max_range_m + opt.compensation_m;
-  sp.groups = opt.groups;
-  sp.condition_groups = opt.condition_groups;
-  check(make_strategy(opt.strategy, sp, s.cfg), "make_strategy");
-  check(chi2_inv(opt.new_landmark_gate, 2, s.second_gate), "chi2_inv");
-  s.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
-  s.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
-  s.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  node::StepSettings<double> ss;
+  ss.strategy = opt.strategy;
+  ss.params.confidence = opt.confidence;
+  ss.params.local_radius_m = sensor.max_range_m + opt.compensation_m;
+  ss.params.groups = opt.groups;
+  ss.params.condition_groups = opt.condition_groups;
+  ss.new_landmark_level = opt.new_landmark_gate;
+  ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
+  ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
+  ss.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  ss.policy = opt.landmark_policy;
+  check(s.step.configure(ss), "configure");
   s.mapped.assign(true_landmarks, 0);
   if (!opt.landmark_group.empty() && opt.landmark_group.size() != true_landmarks) {
     throw std::runtime_error("landmark_group: one entry per true landmark expected");
   }
   s.landmark_group = opt.landmark_group;
-  check(s.slam.reset(x0, P0), "reset");
+  check(s.step.reset(x0, P0), "reset");
 }
 
 SlamSession::~SlamSession() = default;
 
-Pose2<double> SlamSession::pose() const { return st_->slam.pose(); }
+Pose2<double> SlamSession::pose() const { return st_->step.slam().pose(); }
 
 void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
-  check(st_->slam.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
+  check(st_->step.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
 }
 
 void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& R, double t_s,
@@ -119,12 +116,12 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
   s.obs.clear();
   for (const SimObservation& o : scan) check(s.obs.push(o.z, R), "push");
   ekf::LocalMapStats ls;
-  check(s.slam.predict_local(s.cfg.local_radius_m, s.ekf_ws, s.pred, ls), "predict_local");
+  check(s.step.prepare(ls), "predict_local");
   const auto t0 = std::chrono::steady_clock::now();
   if (s.opt.oracle) {
     oracle_associate(s, scan);
   } else {
-    check(associate(s.obs, s.pred, s.cfg, s.ws, s.out), "associate");
+    check(s.step.associate_prepared(s.obs, s.out), "associate");
   }
   res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.budget_hits += s.out.diag.node_budget_hit;
@@ -145,29 +142,27 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
       ++res.group_score.tn;
     }
   }
-  check(s.slam.update(s.obs, s.out, s.ekf_ws), "update");
+  // Update, augment and review: the device's code (node::SlamStep).
+  check(s.step.commit(s.obs, s.out, s.result), "update");
   for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (s.out.feature[i] != kNewFeature || !(s.out.d2[i] > s.second_gate)) continue;
-    FeatureId id = -1;
-    check(s.slam.augment(s.obs.z[i], s.obs.R[i], id), "augment (map capacity)");
-    s.feature_truth.push_back(scan[i].truth);  // ids are handed out in order: index = id
-    if (scan[i].truth >= 0)
-      ++s.mapped[scan[i].truth];
-    else
-      ++res.spurious_landmarks;
+    const node::Outcome o = s.result.outcome[i];
+    if (o == node::Outcome::kNotAugmented) throw std::runtime_error("augment: map capacity exceeded");
+    if (o != node::Outcome::kNewLandmark) continue;
+    if (static_cast<std::size_t>(s.result.feature[i]) != s.feature_truth.size()) {
+      throw std::runtime_error("landmark ids are not handed out in order");
+    }
+    s.feature_truth.push_back(scan[i].truth);
+    if (scan[i].truth >= 0) ++s.mapped[scan[i].truth];
+    else ++res.spurious_landmarks;
   }
-  // Landmark bookkeeping: tentative landmarks missed too often leave the map.
-  ekf::ReviewStats rs;
-  check(s.slam.review(s.pred, s.out, s.view, s.opt.landmark_policy, rs), "review");
-  if (rs.removed > 0) {
+  if (s.result.review.removed > 0) {
+    const ekf::Slam<double, EB>& slam = s.step.slam();
     std::vector<bool> alive(s.feature_truth.size(), false);
-    for (int j = 0; j < s.slam.landmarks(); ++j) alive[s.slam.id(j)] = true;
+    for (int j = 0; j < slam.landmarks(); ++j) alive[slam.id(j)] = true;
     for (std::size_t id = 0; id < s.feature_truth.size(); ++id) {
       if (alive[id] || s.feature_truth[id] == kRemoved) continue;
-      if (s.feature_truth[id] >= 0)
-        --s.mapped[s.feature_truth[id]], ++res.removed_true_landmarks;
-      else
-        ++res.removed_spurious_landmarks;
+      if (s.feature_truth[id] >= 0) --s.mapped[s.feature_truth[id]], ++res.removed_true_landmarks;
+      else ++res.removed_spurious_landmarks;
       s.feature_truth[id] = kRemoved;
     }
   }
@@ -175,14 +170,15 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
   StepRecord r;
   r.t_s = t_s;
   r.truth = *truth;
-  r.estimate = s.slam.pose();
-  r.var_x = s.slam.cov(0, 0);
-  r.var_y = s.slam.cov(1, 1);
+  const ekf::Slam<double, EB>& slam = s.step.slam();
+  r.estimate = slam.pose();
+  r.var_x = slam.cov(0, 0);
+  r.var_y = slam.cov(1, 1);
   const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
                           wrap_angle(r.estimate.theta - r.truth.theta));
   Eigen::Matrix3d P;
   for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) P(a, b) = s.slam.cov(a, b);
+    for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
   r.pose_nees = e.dot(P.ldlt().solve(e));
   res.mean_abs_x_m += std::abs(e.x());
   res.mean_abs_y_m += std::abs(e.y());
@@ -196,10 +192,11 @@ RunResult SlamSession::finish() {
     res.mean_abs_x_m /= static_cast<double>(res.steps.size());
     res.mean_abs_y_m /= static_cast<double>(res.steps.size());
   }
-  res.landmarks = s.slam.landmarks();
+  const ekf::Slam<double, EB>& slam = s.step.slam();
+  res.landmarks = slam.landmarks();
   for (int j = 0; j < res.landmarks; ++j) {
-    const int t = s.feature_truth[s.slam.id(j)];
-    res.map.push_back({s.slam.landmark(j).x(), s.slam.landmark(j).y(), t});
+    const int t = s.feature_truth[slam.id(j)];
+    res.map.push_back({slam.landmark(j).x(), slam.landmark(j).y(), t});
     res.spurious_in_map += t < 0;
   }
   return res;

@@ -12,6 +12,7 @@
 
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/slam_step.hpp"
 #include "support/alloc_counter.hpp"
 #include "support/helpers.hpp"
 
@@ -357,4 +358,35 @@ TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is 
   f->assoc.count = EB::kMaxObservations + 1;
   CHECK(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kInvalidInput);
   CHECK(same());
+}
+
+// The SLAM step the device loop and the evaluation share: refuses to run unconfigured or with a bad
+// configuration (no state change), reports what became of each observation, allocates nothing.
+TEST_CASE_TEMPLATE("SlamStep: configuration, outcomes, no allocation", T, float, double) {
+  using SB = Bounds<16, 24, 5, 1000, 40>;
+  auto s = std::make_unique<node::SlamStep<T, SB>>();
+  Observations<T, SB> obs;
+  auto res = std::make_unique<node::StepResult<T, SB>>();
+  REQUIRE(obs.push(Vec2<T>(T(4), T(0.1)), Mat2<T>(Vec2<T>(T(0.01), T(0.0003)).asDiagonal())) == Status::kOk);
+  CHECK(s->step(obs, *res) == Status::kInvalidInput);  // not configured
+  node::StepSettings<T> bad;
+  bad.params.local_radius_m = T(0);
+  CHECK(s->configure(bad) == Status::kInvalidInput);
+  CHECK(!s->configured());
+  node::StepSettings<T> ok;
+  ok.params.local_radius_m = T(15);
+  ok.view = ekf::Visibility<T>{T(0.5), T(10), T(1.4)};
+  REQUIRE(s->configure(ok) == Status::kOk);
+  REQUIRE(s->reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
+  // First scan: the map is empty, so the observation becomes landmark 0; the second scan pairs it.
+  REQUIRE(s->step(obs, *res) == Status::kOk);
+  CHECK(res->outcome[0] == node::Outcome::kNewLandmark);
+  CHECK(res->feature[0] == 0);
+  Status st = Status::kNoConvergence;
+  CHECK(allocations_during([&] { st = s->step(obs, *res); }) == 0);
+  CHECK(st == Status::kOk);
+  CHECK(res->outcome[0] == node::Outcome::kPaired);
+  CHECK(res->feature[0] == 0);
+  CHECK(s->slam().landmarks() == 1);
+  CHECK(s->slam().hits(0) == 2);  // confirmed by the second pairing
 }
