@@ -134,10 +134,10 @@ AssocResult sample<AssocResult>() {
   AssocResult a{};
   a.batch_id = 77;
   a.count = 4;
-  a.pairs[0] = {12, 1.5f};
-  a.pairs[1] = {kFeatureNew, 20.0f};
-  a.pairs[2] = {kFeatureUnmatched, std::numeric_limits<float>::infinity()};
-  a.pairs[3] = {0, 0.0f};
+  a.pairs[0] = {PairingOutcome::kPaired, 12, 1.5f};
+  a.pairs[1] = {PairingOutcome::kNewDropped, kFeatureNew, 20.0f};
+  a.pairs[2] = {PairingOutcome::kUnmatched, kFeatureUnmatched, std::numeric_limits<float>::infinity()};
+  a.pairs[3] = {PairingOutcome::kNewLandmark, 0, 0.0f};
   return a;
 }
 template <>
@@ -386,7 +386,8 @@ TEST_CASE("protocol: little-endian header and fields, golden PING frame") {
   // i32 two's complement.
   AssocResult a = sample<AssocResult>();
   const Bytes ap = payload_of(a);
-  CHECK(Bytes(ap.begin() + 13, ap.begin() + 17) == Bytes{0xFF, 0xFF, 0xFF, 0xFF});  // pairs[1].feature_id = -1
+  CHECK(ap[14] == 2);                                                                  // pairs[1].outcome
+  CHECK(Bytes(ap.begin() + 15, ap.begin() + 19) == Bytes{0xFF, 0xFF, 0xFF, 0xFF});  // pairs[1].feature_id = -1
 }
 
 TEST_CASE_TEMPLATE("protocol: round trip of every message, whole and one byte at a time", M, Hello, Capabilities,
@@ -809,10 +810,10 @@ TEST_CASE("protocol: counts over capacity, exactly full, and len against count")
     AssocResult full{};
     full.count = 24;
     const Bytes pl = payload_of(full);
-    CHECK(pl.size() == 5 + 24 * 8);
+    CHECK(pl.size() == 5 + 24 * 9);
     Bytes over = pl;
     over[4] = 25;
-    over.resize(5 + 25 * 8, 0);
+    over.resize(5 + 25 * 9, 0);
     AssocResult out = sample<AssocResult>();
     CHECK(out.decode(over.data(), over.size()) == Error::kCapacityExceeded);
     CHECK(out.decode(pl.data(), pl.size() - 8) == Error::kBadLength);
@@ -1006,6 +1007,16 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     a.pairs[0].feature_id = std::numeric_limits<std::int32_t>::max();
     a.pairs[0].d2 = 0.0f;
     rejects(a, Error::kOk);
+    // The outcome and the id agree: an id only for a pairing or a new landmark.
+    a = sample<AssocResult>();
+    a.pairs[0].outcome = PairingOutcome::kUnmatched;
+    rejects(a, Error::kOutOfRange);
+    a = sample<AssocResult>();
+    a.pairs[1].outcome = PairingOutcome::kNewLandmark;
+    rejects(a, Error::kOutOfRange);
+    a = sample<AssocResult>();
+    a.pairs[0].outcome = static_cast<PairingOutcome>(5);
+    rejects(a, Error::kOutOfRange);
   }
   SUBCASE("POSE, CAPABILITIES, ACK, NACK, ERROR") {
     Pose p = sample<Pose>();
@@ -1052,7 +1063,7 @@ TEST_CASE("protocol: HELLO version and schema hash") {
   CHECK(kSchemaHash == fnv1a32(kSchemaText, kSchemaTextLength));
   // Pinned: if this fails, the schema text changed. That is the point: update docs/protocol.md
   // (hash value) and make sure both ends are rebuilt.
-  CHECK(kSchemaHash == 0x81878948u);
+  CHECK(kSchemaHash == 0xBE811E97u);
   Hello h{};
   CHECK(check_hello(h) == Error::kOk);
   h.protocol_version = 2;

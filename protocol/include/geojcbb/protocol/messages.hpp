@@ -582,7 +582,18 @@ using ObsBatch = ObsBatchT<>;
 constexpr std::int32_t kFeatureNew = -1;        ///< the observation starts a new landmark
 constexpr std::int32_t kFeatureUnmatched = -2;  ///< clutter, or ambiguous: not used
 
+/// What became of an observation (firmware_lib node::Outcome, value for value).
+enum class PairingOutcome : std::uint8_t {
+  kPaired = 0,    ///< feature_id: the map landmark it was paired with
+  kNewLandmark,   ///< no compatible candidate; feature_id: the landmark it became
+  kNewDropped,    ///< no compatible candidate, inside the augmentation gate: dropped (kFeatureNew)
+  kUnmatched,     ///< ambiguous, left unpaired (kFeatureUnmatched)
+  kNotAugmented,  ///< would have become a landmark, map full (kFeatureNew)
+};
+constexpr std::uint8_t kMaxPairingOutcome = 4;
+
 struct PairingWire {
+  PairingOutcome outcome = PairingOutcome::kUnmatched;
   std::int32_t feature_id = kFeatureUnmatched;  ///< >= 0, kFeatureNew or kFeatureUnmatched
   float d2 = 0.0f;  ///< Mahalanobis distance squared of the pairing: finite >= 0, or +inf (no candidate)
 };
@@ -592,11 +603,11 @@ template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
 struct AssocResultT : Codec<AssocResultT<MaxObs>> {
   static constexpr MsgType kType = MsgType::kAssocResult;
   static constexpr std::size_t kFixedSize = 5;
-  static constexpr std::size_t kItemSize = 8;
+  static constexpr std::size_t kItemSize = 9;
   static constexpr std::size_t kCapacity = MaxObs;
   static constexpr std::size_t kMaxPayloadSize = kFixedSize + MaxObs * kItemSize;
   static_assert(MaxObs >= 1 && MaxObs <= 255, "count is a u8");
-  static_assert(kMaxPayloadSize <= kMaxPayload, "a full result must fit one frame (MaxObs <= 127)");
+  static_assert(kMaxPayloadSize <= kMaxPayload, "a full result must fit one frame (MaxObs <= 113)");
 
   std::uint32_t batch_id = 0;
   std::uint8_t count = 0;  ///< <= MaxObs
@@ -606,7 +617,10 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
     if (count > MaxObs) return Error::kCapacityExceeded;
     for (std::size_t i = 0; i < count; ++i) {  // <= MaxObs
       const PairingWire& q = pairs[i];
+      if (static_cast<std::uint8_t>(q.outcome) > kMaxPairingOutcome) return Error::kOutOfRange;
       if (q.feature_id < kFeatureUnmatched) return Error::kOutOfRange;
+      const bool has_id = q.outcome == PairingOutcome::kPaired || q.outcome == PairingOutcome::kNewLandmark;
+      if (has_id != (q.feature_id >= 0)) return Error::kOutOfRange;
       if (is_nan(q.d2) || (!is_finite(q.d2) && !is_pos_inf(q.d2))) return Error::kNonFinite;
       if (!(q.d2 >= 0.0f)) return Error::kOutOfRange;
     }
@@ -617,6 +631,7 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
     w.u32(batch_id);
     w.u8(count);
     for (std::size_t i = 0; i < count && i < MaxObs; ++i) {  // <= MaxObs
+      w.u8(static_cast<std::uint8_t>(pairs[i].outcome));
       w.i32(pairs[i].feature_id);
       w.f32(pairs[i].d2);
     }
@@ -629,6 +644,7 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
     if (count > MaxObs) return Error::kCapacityExceeded;
     if (n != kFixedSize + count * kItemSize) return Error::kBadLength;
     for (std::size_t i = 0; i < count; ++i) {  // <= MaxObs
+      pairs[i].outcome = static_cast<PairingOutcome>(r.u8());
       pairs[i].feature_id = r.i32();
       pairs[i].d2 = r.f32();
     }

@@ -42,7 +42,7 @@ inline constexpr char kSchemaText[] =
     "{finite}\n"
     "msg 0x11 OBS_BATCH batch_id:u32 count:u8{<=capacity} repeat range_m:f32{>=0} bearing_rad:f32{[-pi,pi]} "
     "r00:f32 r01:f32 r11:f32 {finite,positive-definite}\n"
-    "msg 0x20 ASSOC_RESULT batch_id:u32 count:u8{<=capacity} repeat feature_id:i32{>=0|-1=new|-2=unmatched} "
+    "msg 0x20 ASSOC_RESULT batch_id:u32 count:u8{<=capacity} repeat outcome:u8{0..4} feature_id:i32{>=0|-1=new|-2=unmatched} "
     "d2:f32{>=0|+inf}\n"
     "msg 0x21 POSE batch_id:u32 x_m:f32 y_m:f32 theta_rad:f32 p00:f32 p01:f32 p02:f32 p11:f32 p12:f32 "
     "p22:f32 landmark_count:u16 {finite,diagonal>=0}\n"
