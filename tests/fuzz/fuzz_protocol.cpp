@@ -74,7 +74,7 @@ void try_all(const std::uint8_t* p, std::size_t n, std::uint8_t type, std::uint1
   try_decode<ObsBatchT<1>>(p, n, type, seq, fl);
   try_decode<ObsBatchT<50>>(p, n, type, seq, fl);
   try_decode<AssocResult>(p, n, type, seq, fl);
-  try_decode<AssocResultT<127>>(p, n, type, seq, fl);
+  try_decode<AssocResultT<113>>(p, n, type, seq, fl);
   try_decode<Pose>(p, n, type, seq, fl);
   try_decode<StatsRequest>(p, n, type, seq, fl);
   try_decode<Stats>(p, n, type, seq, fl);

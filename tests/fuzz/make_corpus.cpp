@@ -121,9 +121,9 @@ int main(int argc, char** argv) {
   AssocResult assoc{};
   assoc.batch_id = 1003;
   assoc.count = 3;
-  assoc.pairs[0] = {4, 0.5f};
-  assoc.pairs[1] = {kFeatureNew, 30.0f};
-  assoc.pairs[2] = {kFeatureUnmatched, std::numeric_limits<float>::infinity()};
+  assoc.pairs[0] = {PairingOutcome::kPaired, 4, 0.5f};
+  assoc.pairs[1] = {PairingOutcome::kNewDropped, kFeatureNew, 30.0f};
+  assoc.pairs[2] = {PairingOutcome::kUnmatched, kFeatureUnmatched, std::numeric_limits<float>::infinity()};
   Pose pose{};
   pose.batch_id = 1003;
   pose.x_m = 2.0f;

@@ -1,0 +1,325 @@
+// node: the device loop. Portable, no OS: the board feeds received bytes to on_bytes() and supplies
+// a write function; the Node decodes frames (protocol/), runs the handshake, CONFIG and RESET, and for
+// each ODOMETRY + OBS_BATCH predicts, associates with the configured strategy, updates, augments and
+// answers ASSOC_RESULT and POSE. STATS on request. The same code runs in a desktop process (over a
+// pseudo-terminal) and on the Cortex-M4F (over the UART).
+//   before HELLO:   only HELLO and PING are served; anything else gets ERROR kNotReady
+//   HELLO           version and schema hash checked: CAPABILITIES, or NACK
+//   CONFIG, RESET   ACK, or NACK with the reason (nothing changes)
+//   ODOMETRY        predict (needs CONFIG and RESET first)
+//   OBS_BATCH       one SLAM step: ASSOC_RESULT then POSE, or ERROR (nothing changes)
+// Frames that fail the framing checks are counted by the decoder and not answered (their seq is not
+// trustworthy); frames of unknown type or with invalid fields are counted and answered with ERROR.
+// No heap: every buffer is a member, sized by the Bounds; the object is typically static.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+#include "geojcbb/node/slam_step.hpp"
+#include "geojcbb/protocol/protocol.hpp"
+
+namespace geojcbb::node {
+
+/// The board's output: writes n bytes (blocking or buffered; the Node does not retry).
+struct Output {
+  void* context = nullptr;
+  void (*write)(void* context, const std::uint8_t* data, std::size_t n) = nullptr;
+};
+
+/// CONFIG's fields as the SLAM step's settings (validated by SlamStep::configure).
+template <typename T, class B>
+StepSettings<T> settings_from(const proto::Config& m) {
+  StepSettings<T> s;
+  s.strategy = static_cast<Strategy>(m.strategy);
+  s.params.confidence = m.confidence;
+  s.params.local_radius_m = static_cast<T>(m.local_radius_m);
+  s.params.groups = m.groups;
+  s.params.condition_groups = m.condition_groups;
+  s.params.dbscan_eps_m = static_cast<T>(m.dbscan_eps_m);
+  s.params.dbscan_min_points = m.dbscan_min_points;
+  s.params.node_budget = m.node_budget > static_cast<std::uint32_t>(B::kMaxJcbbNodes)
+                             ? -1  // over the device's capacity: refused by configure()
+                             : static_cast<int>(m.node_budget);
+  s.new_landmark_level = m.new_landmark_level;
+  s.view = ekf::Visibility<T>{static_cast<T>(m.min_range_m), static_cast<T>(m.max_range_m),
+                              static_cast<T>(m.half_fov_rad)};
+  s.policy = ekf::LandmarkPolicy{m.confirm_hits, m.max_misses, m.max_tentative_reviews};
+  return s;
+}
+
+/// An OBS_BATCH as observations. @return kOk; kCapacityExceeded; kNonFinite (decode validated it).
+template <typename T, class B, std::size_t MaxObs>
+[[nodiscard]] Status observations_from(const proto::ObsBatchT<MaxObs>& m, Observations<T, B>& out) {
+  out.clear();
+  for (std::size_t i = 0; i < m.count; ++i) {  // <= MaxObs
+    const proto::ObservationWire& o = m.obs[i];
+    Mat2<T> R;
+    R << T(o.r00), T(o.r01), T(o.r01), T(o.r11);
+    const Status st = out.push(Vec2<T>(T(o.range_m), T(o.bearing_rad)), R);
+    if (st != Status::kOk) return st;
+  }
+  return Status::kOk;
+}
+
+/// ODOMETRY as the filter's input.
+template <typename T>
+ekf::Odometry<T> odometry_from(const proto::Odometry& m) {
+  return ekf::Odometry<T>{T(m.v_mps), T(m.w_radps), T(m.dt_s), T(m.sigma_v_mps), T(m.sigma_w_radps)};
+}
+
+/// RESET's pose and covariance.
+template <typename T>
+void reset_from(const proto::Reset& m, Pose2<T>& x0, Mat3<T>& P) {
+  const auto& u = m.cov_upper;
+  P << T(u[0]), T(u[1]), T(u[2]), T(u[1]), T(u[3]), T(u[4]), T(u[2]), T(u[4]), T(u[5]);
+  x0 = Pose2<T>{T(m.x_m), T(m.y_m), T(m.theta_rad)};
+}
+
+template <typename T, class B>
+class Node {
+ public:
+  using ObsBatch = proto::ObsBatchT<static_cast<std::size_t>(B::kMaxObservations)>;
+  using AssocResult = proto::AssocResultT<static_cast<std::size_t>(B::kMaxObservations)>;
+
+  /// @param boot_id  changes at every boot, so a host notices a reset
+  /// @param clock    stage counter for STATS (nullptr: zeros)
+  void start(Output out, std::uint32_t boot_id, CounterFn clock = nullptr) {
+    out_ = out;
+    boot_id_ = boot_id;
+    clock_ = clock;
+    hello_ = configured_ = reset_ = false;
+  }
+
+  /// Feeds received bytes.  Bound: n bytes, each O(1) except a frame's end (one message).
+  void on_bytes(const std::uint8_t* p, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {  // <= n
+      proto::FrameView f;
+      if (decoder_.push(p[i], f) == proto::Error::kOk) handle(f);
+    }
+  }
+
+  /// The counters STATS reports.
+  proto::Stats stats() const {
+    proto::Stats s;
+    const proto::DecoderCounters& d = decoder_.counters();
+    s.frames_ok = d.frames_ok;
+    s.bad_crc = d.bad_crc;
+    s.bad_length = d.bad_length;
+    s.overrun = d.overrun;
+    s.bad_version = d.bad_version;
+    s.bad_flags = d.bad_flags;
+    s.unknown_type = msg_counters_.unknown_type;
+    s.invalid_field = msg_counters_.invalid_field;
+    s.budget_hits = budget_hits_;
+    s.scans = scans_;
+    s.instr_predict = last_predict_;
+    s.instr_predict_local = last_.counts.predict_local;
+    s.instr_associate = last_.counts.associate;
+    s.instr_update = last_.counts.update;
+    s.instr_augment_review = last_.counts.augment_review;
+    s.instr_step = last_.counts.total;
+    s.stack_high_water_bytes = stack_high_water_;
+    return s;
+  }
+  void set_stack_high_water(std::uint32_t bytes) { stack_high_water_ = bytes; }
+  const SlamStep<T, B>& slam_step() const { return step_; }
+
+ private:
+  // Decodes a frame's payload into `m` and validates it. Unlike proto::dispatch (which keeps a copy
+  // of every message type on the stack, 1.4 KB on the Cortex-M4F), large messages are read into a
+  // member scratch: the stack stays small and a rejected payload is simply not used.
+  template <class M>
+  static proto::Error take(const proto::FrameView& f, M& m) {
+    if (f.payload == nullptr && f.len > 0) return proto::Error::kBadLength;
+    const proto::Error e = m.read(f.payload, f.len);
+    return e != proto::Error::kOk ? e : m.validate();
+  }
+  template <class M>
+  proto::Error serve(const proto::FrameView& f) {
+    M m{};
+    const proto::Error e = take(f, m);
+    if (e == proto::Error::kOk) on_message(m);
+    return e;
+  }
+
+  void handle(const proto::FrameView& f) {
+    rx_type_ = f.type;
+    rx_seq_ = f.seq;
+    proto::Error e = proto::Error::kOk;
+    switch (static_cast<proto::MsgType>(f.type)) {
+      case proto::MsgType::kHello: e = serve<proto::Hello>(f); break;
+      case proto::MsgType::kPing: e = serve<proto::Ping>(f); break;
+      case proto::MsgType::kConfig: e = serve<proto::Config>(f); break;
+      case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
+      case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
+      case proto::MsgType::kStatsRequest: e = serve<proto::StatsRequest>(f); break;
+      case proto::MsgType::kObsBatch:
+        e = take(f, rx_batch_);
+        if (e == proto::Error::kOk) on_message(rx_batch_);
+        break;
+      default: e = proto::Error::kUnknownType; break;  // unknown, or a type a device does not take
+    }
+    if (e != proto::Error::kOk) {
+      msg_counters_.record(e);
+      error(e);
+    }
+  }
+
+  void on_message(const proto::Hello& m) {
+    const proto::Error e = proto::check_hello(m);
+    if (e != proto::Error::kOk) {
+      nack(e);
+      return;
+    }
+    hello_ = true;
+    proto::Capabilities c;
+    c.max_observations = static_cast<std::uint16_t>(B::kMaxObservations);
+    c.max_candidates = static_cast<std::uint16_t>(B::kMaxCandidates);
+    c.max_groups = static_cast<std::uint8_t>(B::kMaxGroups);
+    c.max_landmarks = static_cast<std::uint16_t>(B::kMaxLandmarks);
+    c.max_jcbb_nodes = static_cast<std::uint32_t>(B::kMaxJcbbNodes);
+    c.scalar_bytes = static_cast<std::uint8_t>(sizeof(T));
+    c.boot_id = boot_id_;
+    const char id[] = "geojcbb node";
+    for (std::size_t i = 0; i < sizeof(id) - 1 && i < c.firmware_id.size(); ++i) c.firmware_id[i] = id[i];  // <= 16
+    send(c);
+  }
+
+  void on_message(const proto::Ping& m) {
+    proto::Pong p;
+    p.nonce = m.nonce;
+    send(p);
+  }
+
+  void on_message(const proto::Config& m) {
+    if (!ready()) return;
+    const StepSettings<T> s = settings_from<T, B>(m);
+    const Status st = step_.configure(s);
+    if (st != Status::kOk) {
+      nack(st == Status::kInvalidInput ? proto::Error::kOutOfRange : proto::Error::kInternal);
+      return;
+    }
+    configured_ = true;
+    ack();
+  }
+
+  void on_message(const proto::Reset& m) {
+    if (!ready()) return;
+    Pose2<T> x0;
+    Mat3<T> P;
+    reset_from(m, x0, P);
+    const Status st = step_.reset(x0, P);
+    if (st != Status::kOk) {
+      nack(proto::Error::kNotPositiveDefinite);
+      return;
+    }
+    reset_ = true;
+    ack();
+  }
+
+  void on_message(const proto::Odometry& m) {
+    if (!running()) return;
+    const std::uint32_t t0 = clock_ ? clock_() : 0;
+    const Status st = step_.predict(odometry_from<T>(m));
+    last_predict_ = clock_ ? clock_() - t0 : 0;
+    if (st != Status::kOk) invalid();
+  }
+
+  void on_message(const ObsBatch& m) {
+    if (!running()) return;
+    if (observations_from(m, obs_) != Status::kOk) {
+      invalid();
+      return;
+    }
+    if (step_.step(obs_, last_, clock_) != Status::kOk) {
+      invalid();
+      return;
+    }
+    ++scans_;
+    budget_hits_ += last_.diag.node_budget_hit ? 1u : 0u;
+    result_.batch_id = m.batch_id;
+    result_.count = m.count;
+    for (int i = 0; i < last_.count; ++i) {  // <= kMaxObservations
+      proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(i)];
+      q.outcome = static_cast<proto::PairingOutcome>(last_.outcome[i]);
+      const bool has_id = last_.outcome[i] == Outcome::kPaired || last_.outcome[i] == Outcome::kNewLandmark;
+      q.feature_id = has_id ? last_.feature[i]
+                     : last_.outcome[i] == Outcome::kUnmatched ? proto::kFeatureUnmatched
+                                                               : proto::kFeatureNew;
+      q.d2 = static_cast<float>(last_.d2[i]);
+    }
+    send(result_);
+    const ekf::Slam<T, B>& s = step_.slam();
+    proto::Pose p;
+    p.batch_id = m.batch_id;
+    p.x_m = static_cast<float>(s.x(0));
+    p.y_m = static_cast<float>(s.x(1));
+    p.theta_rad = static_cast<float>(s.x(2));
+    p.cov_upper = {static_cast<float>(s.cov(0, 0)), static_cast<float>(s.cov(0, 1)), static_cast<float>(s.cov(0, 2)),
+                   static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
+    p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
+    send(p);
+  }
+
+  void on_message(const proto::StatsRequest&) { send(stats()); }
+
+  bool ready() {
+    if (hello_) return true;
+    error(proto::Error::kNotReady);
+    return false;
+  }
+  bool running() {
+    if (hello_ && configured_ && reset_) return true;
+    error(proto::Error::kNotReady);
+    return false;
+  }
+  void invalid() {
+    msg_counters_.record(proto::Error::kOutOfRange);
+    error(proto::Error::kOutOfRange);
+  }
+  void ack() {
+    proto::Ack a;
+    a.acked_type = rx_type_;
+    a.acked_seq = rx_seq_;
+    send(a);
+  }
+  void nack(proto::Error e) {
+    proto::Nack n;
+    n.nacked_type = rx_type_;
+    n.nacked_seq = rx_seq_;
+    n.error = e;
+    send(n);
+  }
+  void error(proto::Error e) {
+    if (!proto::detail::is_reportable(e)) e = proto::Error::kInternal;
+    proto::ErrorReport r;
+    r.error = e;
+    r.offending_type = rx_type_;
+    r.offending_seq = rx_seq_;
+    send(r);
+  }
+  template <class M>
+  void send(const M& m) {
+    if (proto::encode_message(m, tx_seq_++, 0, frame_) == proto::Error::kOk && out_.write != nullptr) {
+      out_.write(out_.context, frame_.bytes.data(), frame_.size);
+    }
+  }
+
+  SlamStep<T, B> step_;
+  Observations<T, B> obs_;
+  StepResult<T, B> last_;
+  ObsBatch rx_batch_;
+  AssocResult result_;
+  proto::Decoder decoder_;
+  proto::MessageCounters msg_counters_;
+  proto::EncodedFrame frame_;
+  Output out_;
+  CounterFn clock_ = nullptr;
+  std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, last_predict_ = 0, stack_high_water_ = 0;
+  std::uint16_t tx_seq_ = 0, rx_seq_ = 0;
+  std::uint8_t rx_type_ = 0;
+  bool hello_ = false, configured_ = false, reset_ = false;
+};
+
+}  // namespace geojcbb::node

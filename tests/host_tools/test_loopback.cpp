@@ -1,0 +1,130 @@
+// The serial link end to end on a pseudo-terminal: the device loop (node::Node in float) serves the
+// pty's master in a thread, the host's LinkClient talks to the slave through the termios transport,
+// and a whole scenario is streamed. Every association and pose must equal, bit for bit, the
+// in-process SLAM step in float fed with the same decoded inputs.
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cstring>
+#include <thread>
+
+#include "geojcbb/node/node.hpp"
+#include "geojcbb_host/stream.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::host;
+
+namespace {
+std::uint32_t bits(float f) {
+  std::uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  return u;
+}
+
+struct Device {
+  Pty pty;
+  std::atomic<bool> stop{false};
+  std::thread thread;
+  explicit Device(std::uint32_t boot_id) : thread([this, boot_id] { serve_device(pty, stop, boot_id); }) {}
+  ~Device() {
+    stop = true;
+    thread.join();
+  }
+};
+}  // namespace
+
+TEST_CASE("loopback: a whole env1 run over a pty equals the in-process float pipeline, bit for bit") {
+  Scenario sc = load_scenario(std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json");
+  Device dev(0xB007);
+  PosixSerial port(dev.pty.slave_path());
+  LinkClient link(port);
+  const proto::Capabilities caps = link.hello();
+  CHECK(caps.boot_id == 0xB007u);
+  CHECK(caps.max_observations == DesktopBounds::kMaxObservations);
+  CHECK(caps.scalar_bytes == 4);
+  CHECK(caps.schema_hash == proto::kSchemaHash);
+
+  for (Strategy s : {Strategy::kGeojcbb, Strategy::kJcbb}) {
+    CAPTURE(to_string(s));
+    RunOptions o;
+    o.max_steps = 0;  // the whole lap: 737 scans
+    // The reference: the same messages, decoded the same way, run in this process.
+    auto ref = std::make_unique<node::SlamStep<float, DesktopBounds>>();
+    REQUIRE(ref->configure(node::settings_from<float, DesktopBounds>(link_config(sc, s, o))) == Status::kOk);
+    Pose2<float> x0;
+    Mat3<float> P0;
+    node::reset_from(link_reset(sc), x0, P0);
+    REQUIRE(ref->reset(x0, P0) == Status::kOk);
+    auto obs = std::make_unique<Observations<float, DesktopBounds>>();
+    auto res = std::make_unique<node::StepResult<float, DesktopBounds>>();
+    // The odometry reaches the reference through the hook's ordering: replay the same simulator.
+    Simulator sim(sc, 3);
+    SimStep step;
+    long mismatches = 0, scans = 0, pairs = 0;
+    auto hook = [&](const LinkObsBatch& b, const LinkClient::ScanReply& r) {
+      // Advance the reference to this scan with the same odometry the device received.
+      while (sim.step(step)) {
+        REQUIRE(ref->predict(node::odometry_from<float>(link_odometry(sc, step))) == Status::kOk);
+        if (step.scan) break;
+      }
+      REQUIRE(node::observations_from(b, *obs) == Status::kOk);
+      REQUIRE(ref->step(*obs, *res) == Status::kOk);
+      ++scans;
+      for (int i = 0; i < res->count; ++i) {
+        const proto::PairingWire& q = r.result.pairs[static_cast<std::size_t>(i)];
+        const bool same = static_cast<int>(q.outcome) == static_cast<int>(res->outcome[i]) &&
+                          (q.feature_id >= 0 ? q.feature_id == res->feature[i] : res->feature[i] == -1) &&
+                          bits(q.d2) == bits(res->d2[i]);
+        mismatches += !same;
+        pairs += q.outcome == proto::PairingOutcome::kPaired;
+      }
+      const ekf::Slam<float, DesktopBounds>& sl = ref->slam();
+      const float mine[] = {sl.x(0), sl.x(1), sl.x(2), sl.cov(0, 0), sl.cov(0, 1), sl.cov(0, 2),
+                            sl.cov(1, 1), sl.cov(1, 2), sl.cov(2, 2)};
+      const float theirs[] = {r.pose.x_m, r.pose.y_m, r.pose.theta_rad, r.pose.cov_upper[0], r.pose.cov_upper[1],
+                              r.pose.cov_upper[2], r.pose.cov_upper[3], r.pose.cov_upper[4], r.pose.cov_upper[5]};
+      for (int k = 0; k < 9; ++k) mismatches += bits(mine[k]) != bits(theirs[k]);
+      mismatches += r.pose.landmark_count != sl.landmarks();
+    };
+    const RunResult run = stream_scenario(link, sc, 3, s, o, hook);
+    CHECK(scans == 737);
+    CHECK(run.scans == 737);
+    CHECK(pairs > 3000);
+    CHECK(mismatches == 0);
+    CHECK(run.score.f1() > 0.98);
+  }
+  const proto::Stats st = link.stats();
+  CHECK(st.scans == 2 * 737);
+  CHECK(st.bad_crc == 0);
+  CHECK(st.bad_length == 0);
+  CHECK(st.invalid_field == 0);
+}
+
+TEST_CASE("loopback: the device refuses work before the handshake and a wrong schema") {
+  Device dev(7);
+  PosixSerial port(dev.pty.slave_path());
+  LinkClient link(port, 1000);
+  CHECK_THROWS_WITH_AS(link.configure(proto::Config{}), doctest::Contains("not-ready"), LinkError);
+  link.hello();
+  // The client refuses to send an invalid CONFIG ...
+  proto::Config bad;
+  bad.local_radius_m = -1.0f;
+  CHECK_THROWS_WITH_AS(link.configure(bad), doctest::Contains("out-of-range"), LinkError);
+  // ... so write one by hand (radius at payload offset 9): the device answers ERROR, counts it,
+  // and changes nothing.
+  std::uint8_t payload[proto::Config::kMaxPayloadSize];
+  std::size_t n = 0;
+  REQUIRE(proto::Config{}.encode(payload, sizeof payload, n) == proto::Error::kOk);
+  const float minus_one = -1.0f;
+  std::memcpy(payload + 9, &minus_one, 4);  // little-endian host
+  proto::EncodedFrame f;
+  REQUIRE(proto::encode_frame(static_cast<std::uint8_t>(proto::MsgType::kConfig), 77, 0, payload, n, f.bytes.data(),
+                              f.bytes.size(), f.size) == proto::Error::kOk);
+  port.write(f.bytes.data(), f.size);
+  CHECK_THROWS_WITH_AS(link.stats(), doctest::Contains("seq 77: out-of-range"), LinkError);
+  const proto::Stats st = link.stats();
+  CHECK(st.invalid_field == 1);
+  // The first STATS (answering the first request, queued behind the ERROR) counts CONFIG before
+  // HELLO, HELLO, the bad CONFIG and that request.
+  CHECK(st.frames_ok == 4);
+}
