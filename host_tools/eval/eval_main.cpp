@@ -7,6 +7,9 @@
 //           fitting, x/y error over time, F1 per strategy, NEES over time).
 //   mrclam  the same filter and metrics on the UTIAS MRCLAM real data (every
 //   strategy, every robot).
+// With --port (or --device, which starts a device program on a pty) every run is streamed to a
+// device over the serial link instead of running in process (host_tools/link: stream_run, one run
+// at a time, reconnecting as LinkSession does), and the device's replies are scored the same way.
 // Timing never decides anything here; it is reported.
 #include <unistd.h>
 
@@ -22,6 +25,7 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -29,8 +33,10 @@
 
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/svg_plot.hpp"
 
 using namespace geojcbb;
@@ -62,6 +68,8 @@ struct SimOptions {
   bool progress = true;
   bool oracle = false;
   RunOptions run;
+  RunInputsFn runner;       ///< empty: in process
+  std::string device_info;  ///< the device the runs were streamed to (empty: in process)
 };
 
 std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool oracle) {
@@ -135,7 +143,9 @@ int run_sim(const SimOptions& o) {
   };
   std::vector<std::string> csv_rows(jobs.size());
   std::mutex mu;
-  const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = o.runner     ? 1  // one device, one run at a time
+                      : o.jobs > 0 ? o.jobs
+                                   : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, o.progress, [&](std::size_t j) {
     const Job& jb = jobs[j];
     RunOptions ro = o.run;
@@ -145,7 +155,8 @@ int run_sim(const SimOptions& o) {
     RunResult r;
     std::string err;
     try {
-      r = run_slam(scenarios[jb.sc], seed, ro);
+      SimSource src(scenarios[jb.sc], seed, ro.max_steps);
+      r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
       err = e.what();
     }
@@ -176,6 +187,7 @@ int run_sim(const SimOptions& o) {
   js["first_seed"] = o.seed;
   js["threads"] = threads;
   js["wall_s"] = wall_s;
+  if (!o.device_info.empty()) js["device"] = o.device_info;
   int failures = 0;
   double lo = 0, hi = 0;
   const bool have_bounds =
@@ -200,7 +212,7 @@ int run_sim(const SimOptions& o) {
       row.abs_x = c.runs ? c.abs_x / c.runs : NAN;
       row.abs_y = c.runs ? c.abs_y / c.runs : NAN;
       row.landmarks = c.runs ? double(c.landmarks) / c.runs : NAN;
-      row.spurious_in_map = c.runs ? double(c.spurious_in_map) / c.runs : NAN;
+      row.spurious_in_map = c.runs && !o.runner ? double(c.spurious_in_map) / c.runs : NAN;
       // NEES: the mean over runs at each scan against its 95 % bounds for 3 x
       // runs dof, and the average over the run.
       if (c.runs > 0 && !c.nees_sum.empty()) {
@@ -336,6 +348,56 @@ int run_sim(const SimOptions& o) {
   return failures > 0 ? 1 : 0;
 }
 
+// Runs `run` in process (no --port/--device), or with every run streamed to the device: prints the
+// device and where its capacity differs from the in-process filter's, and at the end shuts down a
+// device it started. Returns run's exit code (1 when a started device did not exit cleanly).
+template <class Run>
+int with_device(const LinkCli& lc, bool oracle, Run&& run) {
+  if (lc.port.empty() && lc.device.empty()) return run(RunInputsFn{}, std::string{});
+  if (!lc.port.empty() && !lc.device.empty()) throw std::runtime_error("give --port or --device, not both");
+  if (oracle) throw std::runtime_error("the TRUTH row (--truth) runs in process only: drop it with --port/--device");
+  DeviceLink dl(lc, !lc.device.empty());
+  const std::string info = dl.describe();
+  std::printf("%s; %d scan(s) in flight, reply timeout %d ms\n", info.c_str(), lc.window, lc.timeout_ms);
+  const proto::Capabilities& caps = dl.session().capabilities();
+  const int obs = std::min<int>(caps.max_observations, static_cast<int>(kLinkMaxObs));
+  if (obs < kEvalMaxObservations) {
+    std::printf(
+        "  the device takes at most %d observations per scan (in process: %d): each scan's nearest %d are "
+        "sent, the rest dropped and not scored\n",
+        obs, kEvalMaxObservations, obs);
+  }
+  if (caps.max_landmarks < kEvalMaxLandmarks) {
+    std::printf(
+        "  the device's map holds %u landmarks (in process: %d): past that, new landmarks are not added "
+        "(noted per run)\n",
+        caps.max_landmarks, kEvalMaxLandmarks);
+  }
+  std::mutex mu;
+  std::set<std::string> said;
+  StreamOptions st;
+  st.window = lc.window;
+  st.note = [&](const std::string& n) {
+    std::lock_guard<std::mutex> lock(mu);
+    if (said.insert(n).second) std::printf("  %s\n", n.c_str());
+  };
+  const RunInputsFn runner = [&](RunSource& src, const RunOptions& ro) {
+    return stream_run(dl.session(), src, ro, st);
+  };
+  int rc = run(runner, info);
+  if (dl.session().reconnections() > 0) {
+    std::printf("link: %d reconnection(s), %d run restart(s)\n", dl.session().reconnections(), dl.session().restarts());
+  }
+  if (dl.started_device()) {
+    const int code = dl.shut_down();
+    if (code != 0) {
+      std::fprintf(stderr, "geojcbb_eval: the device did not exit cleanly after SHUTDOWN (exit code %d)\n", code);
+      if (rc == 0) rc = 1;
+    }
+  }
+  return rc;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -401,6 +463,10 @@ int main(int argc, char** argv) {
   sim->add_option("--max-misses", so.run.landmark_policy.max_misses, "misses in view that remove a tentative landmark")
       ->default_val(2)
       ->check(CLI::Range(1, 255));
+  LinkCli sim_link;
+  add_link_options(*sim, sim_link,
+                   "stream every run to the device on this serial port or pty instead of running it in process",
+                   "start this device program with --pty (e.g. geojcbb_device) and stream every run to it");
 
   MrclamOptions mo;
   std::string mo_out = "build/results/mrclam";
@@ -443,6 +509,10 @@ int main(int argc, char** argv) {
                "remove measurements of the other robots instead of feeding "
                "them as clutter");
   mr->add_option("--jobs", mo.jobs, "worker threads (default: the number of cores)")->check(CLI::Range(0, 256));
+  LinkCli mr_link;
+  add_link_options(*mr, mr_link,
+                   "stream every replay to the device on this serial port or pty instead of running it in process",
+                   "start this device program with --pty (e.g. geojcbb_device) and stream every replay to it");
 
   CLI11_PARSE(app, argc, argv);
   try {
@@ -452,10 +522,18 @@ int main(int argc, char** argv) {
                         std::string(GEOJCBB_SCENARIO_DIR) + "/env2.json"};
       }
       so.progress = so.progress && isatty(STDERR_FILENO);
-      return run_sim(so);
+      return with_device(sim_link, so.oracle, [&](const RunInputsFn& runner, const std::string& info) {
+        so.runner = runner;
+        so.device_info = info;
+        return run_sim(so);
+      });
     }
     mo.strategies = parse_strategies(mo_strategies, mo_oracle);
-    return run_mrclam_report(mo, mo_out, mo_progress && isatty(STDERR_FILENO));
+    return with_device(mr_link, mo_oracle, [&](const RunInputsFn& runner, const std::string&) {
+      mo.runner = runner;
+      if (runner) mo.jobs = 1;  // one device, one replay at a time
+      return run_mrclam_report(mo, mo_out, mo_progress && isatty(STDERR_FILENO));
+    });
   } catch (const std::exception& e) {
     std::fprintf(stderr, "geojcbb_eval: %s\n", e.what());
     return 2;

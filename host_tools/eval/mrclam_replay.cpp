@@ -30,16 +30,18 @@ MrclamNoise MrclamNoise::from_data(const mrclam::Dataset& ds, const std::vector<
 
 SensorModel mrclam_sensor(const MrclamNoise& n) { return SensorModel{0.9, 9.3, 1.2, n.sigma_bearing_rad}; }
 
-RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& opt,
-                       const MrclamNoise& noise, bool drop_other_robots) {
+MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamNoise& noise,
+                           bool drop_other_robots) {
   if (log.odometry.size() < 2 || log.truth.empty()) throw std::runtime_error("robot log without odometry or truth");
   // Start where both odometry and ground truth exist.
   std::size_t i = 0;
   mrclam::PoseSample p0{};
   while (i + 1 < log.odometry.size() && !mrclam::interpolate_truth(log.truth, log.odometry[i].t, p0)) ++i;
   if (i + 1 >= log.odometry.size()) throw std::runtime_error("no odometry sample has a ground-truth pose");
-  SlamSession session(opt, mrclam_sensor(noise), ds.landmarks.size(), Pose2<double>{p0.x, p0.y, p0.theta},
-                      Eigen::Matrix3d::Identity() * 1e-6);
+  sensor = mrclam_sensor(noise);
+  true_landmarks = ds.landmarks.size();
+  x0 = Pose2<double>{p0.x, p0.y, p0.theta};
+  P0 = Eigen::Matrix3d::Identity() * 1e-6;
   const Eigen::Matrix2d R =
       Eigen::Vector2d(noise.sigma_range_m * noise.sigma_range_m, noise.sigma_bearing_rad * noise.sigma_bearing_rad)
           .asDiagonal();
@@ -58,12 +60,16 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
       const double end = moving ? std::min(to, hold_end) : to;
       const double dt = end - t;
       const double k = 1.0 / std::sqrt(std::max(dt, 1e-6));
-      session.predict(moving ? log.odometry[i].v : 0.0, moving ? log.odometry[i].w : 0.0, dt, noise.sigma_v_mps * k,
-                      noise.sigma_w_radps * k);
+      RunInput in;
+      in.v_mps = moving ? log.odometry[i].v : 0.0;
+      in.w_radps = moving ? log.odometry[i].w : 0.0;
+      in.dt_s = dt;
+      in.sigma_v_mps = noise.sigma_v_mps * k;
+      in.sigma_w_radps = noise.sigma_w_radps * k;
+      inputs_.push_back(std::move(in));
       t = end;
     }
   };
-  std::vector<SimObservation> obs;
   for (const mrclam::Scan& scan : log.scans) {
     if (scan.t < t) continue;  // before the start
     while (i + 1 < log.odometry.size() && log.odometry[i + 1].t <= scan.t) {
@@ -71,7 +77,9 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
       ++i;
     }
     advance(scan.t);
-    obs.clear();
+    RunInput in;
+    in.scan = true;
+    std::vector<SimObservation>& obs = in.observations;
     for (const mrclam::Measurement& m : scan.z) {
       if (drop_other_robots && m.subject >= 1 && m.subject <= mrclam::kRobots) continue;
       const int truth =
@@ -79,11 +87,18 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
       obs.push_back({Eigen::Vector2d(m.range, m.bearing), truth});
     }
     mrclam::PoseSample pt{};
-    const bool have_truth = mrclam::interpolate_truth(log.truth, scan.t, pt);
-    const Pose2<double> truth{pt.x, pt.y, pt.theta};
-    session.scan(obs, R, scan.t, have_truth ? &truth : nullptr);
+    in.have_truth = mrclam::interpolate_truth(log.truth, scan.t, pt);
+    in.true_pose = Pose2<double>{pt.x, pt.y, pt.theta};
+    in.R = R;
+    in.t_s = scan.t;
+    inputs_.push_back(std::move(in));
   }
-  return session.finish();
+}
+
+RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& opt,
+                       const MrclamNoise& noise, bool drop_other_robots) {
+  MrclamSource src(ds, log, noise, drop_other_robots);
+  return run_inputs(src, opt);
 }
 
 std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
@@ -144,7 +159,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     ro.landmark_group = landmark_groups(data[jb.d].ds, kLandmarkGroupRadius_m);
     const auto a = std::chrono::steady_clock::now();
     try {
-      jb.res = replay_robot(data[jb.d].ds, data[jb.d].logs[jb.r], ro, data[jb.d].noise, o.drop_other_robots);
+      MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], data[jb.d].noise, o.drop_other_robots);
+      jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
       jb.error = e.what();
     }
@@ -232,7 +248,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       row.abs_x /= row.runs;
       row.abs_y /= row.runs;
       row.landmarks /= row.runs;
-      row.spurious_in_map /= row.runs;
+      row.spurious_in_map = o.runner ? NAN : row.spurious_in_map / row.runs;  // a device does not report its map
       row.anees /= row.runs;  // mean over robots of each run's time-averaged
                               // NEES (no Monte Carlo bounds)
     }

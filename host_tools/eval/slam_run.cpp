@@ -7,20 +7,104 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "geojcbb/node/slam_step.hpp"
 
 namespace geojcbb::host {
 
 namespace {
-using EB = Bounds<48, 128, 8, 200000, 400>;  // host evaluation capacity
-
-constexpr int kRemoved = -2;  // feature_truth of a landmark id that has left the map
+using EB = Bounds<kEvalMaxObservations, 128, 8, 200000, kEvalMaxLandmarks>;  // host evaluation capacity
 
 void check(Status s, const char* what) {
   if (s != Status::kOk) throw std::runtime_error(std::string(what) + ": " + to_string(s));
 }
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+RunScorer::RunScorer(std::size_t true_landmarks, std::vector<int> landmark_group)
+    : mapped_(true_landmarks, 0), landmark_group_(std::move(landmark_group)) {
+  if (!landmark_group_.empty() && landmark_group_.size() != true_landmarks) {
+    throw std::runtime_error("landmark_group: one entry per true landmark expected");
+  }
+}
+
+int RunScorer::truth_of(FeatureId id) const {
+  return id >= 0 && static_cast<std::size_t>(id) < feature_truth_.size() ? feature_truth_[static_cast<std::size_t>(id)]
+                                                                         : kUnknown;
+}
+
+void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId>& paired) {
+  if (truth.size() != paired.size()) throw std::runtime_error("score: one pairing per observation expected");
+  res_.observations += static_cast<int>(truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const int t = truth[i];
+    const FeatureId f = paired[i];
+    const bool known = t >= 0 && mapped_[static_cast<std::size_t>(t)] > 0;
+    if (f >= 0) {
+      const int ft = truth_of(f);
+      ++((t >= 0 && ft == t) ? res_.score.tp : res_.score.fp);
+      ++((t >= 0 && ft >= 0 && cls(ft) == cls(t)) ? res_.group_score.tp : res_.group_score.fp);
+    } else if (known) {
+      ++res_.score.fn;
+      ++res_.group_score.fn;
+    } else {
+      ++res_.score.tn;
+      ++res_.group_score.tn;
+    }
+  }
+}
+
+void RunScorer::added(FeatureId id, int truth) {
+  if (id < 0) return;
+  const auto k = static_cast<std::size_t>(id);
+  if (k >= feature_truth_.size()) feature_truth_.resize(k + 1, kUnknown);
+  feature_truth_[k] = truth;
+  if (truth >= 0) {
+    ++mapped_[static_cast<std::size_t>(truth)];
+  } else {
+    ++res_.spurious_landmarks;
+  }
+}
+
+void RunScorer::removed(FeatureId id) {
+  const int t = truth_of(id);
+  if (t == kRemoved || t == kUnknown) return;
+  if (t >= 0) {
+    --mapped_[static_cast<std::size_t>(t)];
+    ++res_.removed_true_landmarks;
+  } else {
+    ++res_.removed_spurious_landmarks;
+  }
+  feature_truth_[static_cast<std::size_t>(id)] = kRemoved;
+}
+
+void RunScorer::pose(double t_s, const Pose2<double>& truth, const Pose2<double>& estimate, const Eigen::Matrix3d& P) {
+  StepRecord r;
+  r.t_s = t_s;
+  r.truth = truth;
+  r.estimate = estimate;
+  r.var_x = P(0, 0);
+  r.var_y = P(1, 1);
+  const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
+                          wrap_angle(r.estimate.theta - r.truth.theta));
+  r.pose_nees = e.dot(P.ldlt().solve(e));
+  res_.mean_abs_x_m += std::abs(e.x());
+  res_.mean_abs_y_m += std::abs(e.y());
+  res_.steps.push_back(r);
+}
+
+RunResult RunScorer::finish() const {
+  RunResult res = res_;
+  if (!res.steps.empty()) {
+    res.mean_abs_x_m /= static_cast<double>(res.steps.size());
+    res.mean_abs_y_m /= static_cast<double>(res.steps.size());
+  }
+  return res;
+}
+
+// ---------------------------------------------------------------------------------------------
 
 struct SlamSession::State {
   node::SlamStep<double, EB> step;
@@ -28,11 +112,9 @@ struct SlamSession::State {
   Association<double, EB> out;
   node::StepResult<double, EB> result;
   RunOptions opt;
-  std::vector<int> feature_truth;   // landmark id -> true landmark it came from (-1 clutter)
-  std::vector<int> mapped;          // true landmark -> map landmarks made from it
-  std::vector<int> landmark_group;  // true landmark -> its group (empty: each its own)
-  int cls(int t) const { return landmark_group.empty() ? t : landmark_group[t]; }
-  RunResult res;
+  std::unique_ptr<RunScorer> scorer;
+  std::vector<int> truth;         // scratch: the scan's truths
+  std::vector<FeatureId> paired;  // scratch: the scan's pairings
 };
 
 // The ground-truth association: each observation of a mapped landmark is paired with the candidate
@@ -58,7 +140,7 @@ static void oracle_associate(SlamSession::State& s, const std::vector<SimObserva
       nearest = std::min(nearest, d2);
       const FeatureId id = pred.id[a];
       const int hits = s.step.slam().hits(s.step.slam().index_of(id));
-      if (t >= 0 && s.feature_truth[id] == t && d2 < gate && hits > best_hits) {
+      if (t >= 0 && s.scorer->truth_of(id) == t && d2 < gate && hits > best_hits) {
         best = id;
         best_d2 = d2;
         best_hits = hits;
@@ -86,11 +168,7 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   ss.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
   ss.policy = opt.landmark_policy;
   check(s.step.configure(ss), "configure");
-  s.mapped.assign(true_landmarks, 0);
-  if (!opt.landmark_group.empty() && opt.landmark_group.size() != true_landmarks) {
-    throw std::runtime_error("landmark_group: one entry per true landmark expected");
-  }
-  s.landmark_group = opt.landmark_group;
+  s.scorer = std::make_unique<RunScorer>(true_landmarks, opt.landmark_group);
   check(s.step.reset(x0, P0), "reset");
 }
 
@@ -105,7 +183,8 @@ void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
 void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& R, double t_s,
                        const Pose2<double>* truth) {
   State& s = *st_;
-  RunResult& res = s.res;
+  RunScorer& sc = *s.scorer;
+  RunResult& res = sc.result();
   ++res.scans;
   // Observations over the capacity: the nearest are kept.
   std::sort(scan.begin(), scan.end(), [](const auto& a, const auto& b) { return a.z.x() < b.z.x(); });
@@ -125,99 +204,133 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
   }
   res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.budget_hits += s.out.diag.node_budget_hit;
-  res.observations += static_cast<int>(scan.size());
+  s.truth.clear();
+  s.paired.clear();
   for (std::size_t i = 0; i < scan.size(); ++i) {
-    const int t = scan[i].truth;
-    const FeatureId f = s.out.feature[i];
-    const bool known = t >= 0 && s.mapped[t] > 0;
-    if (f >= 0) {
-      const int ft = s.feature_truth[f];
-      ++((t >= 0 && ft == t) ? res.score.tp : res.score.fp);
-      ++((t >= 0 && ft >= 0 && s.cls(ft) == s.cls(t)) ? res.group_score.tp : res.group_score.fp);
-    } else if (known) {
-      ++res.score.fn;
-      ++res.group_score.fn;
-    } else {
-      ++res.score.tn;
-      ++res.group_score.tn;
-    }
+    s.truth.push_back(scan[i].truth);
+    s.paired.push_back(s.out.feature[i]);
   }
+  sc.score(s.truth, s.paired);
   // Update, augment and review: the device's code (node::SlamStep).
   check(s.step.commit(s.obs, s.out, s.result), "update");
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
     if (o == node::Outcome::kNotAugmented) throw std::runtime_error("augment: map capacity exceeded");
     if (o != node::Outcome::kNewLandmark) continue;
-    if (static_cast<std::size_t>(s.result.feature[i]) != s.feature_truth.size()) {
+    if (static_cast<std::size_t>(s.result.feature[i]) != sc.ids()) {
       throw std::runtime_error("landmark ids are not handed out in order");
     }
-    s.feature_truth.push_back(scan[i].truth);
-    if (scan[i].truth >= 0) ++s.mapped[scan[i].truth];
-    else ++res.spurious_landmarks;
+    sc.added(s.result.feature[i], scan[i].truth);
   }
   if (s.result.review.removed > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
-    std::vector<bool> alive(s.feature_truth.size(), false);
-    for (int j = 0; j < slam.landmarks(); ++j) alive[slam.id(j)] = true;
-    for (std::size_t id = 0; id < s.feature_truth.size(); ++id) {
-      if (alive[id] || s.feature_truth[id] == kRemoved) continue;
-      if (s.feature_truth[id] >= 0) --s.mapped[s.feature_truth[id]], ++res.removed_true_landmarks;
-      else ++res.removed_spurious_landmarks;
-      s.feature_truth[id] = kRemoved;
+    std::vector<bool> alive(sc.ids(), false);
+    for (int j = 0; j < slam.landmarks(); ++j) alive[static_cast<std::size_t>(slam.id(j))] = true;
+    for (std::size_t id = 0; id < sc.ids(); ++id) {
+      if (!alive[id]) sc.removed(static_cast<FeatureId>(id));
     }
   }
   if (truth == nullptr) return;
-  StepRecord r;
-  r.t_s = t_s;
-  r.truth = *truth;
   const ekf::Slam<double, EB>& slam = s.step.slam();
-  r.estimate = slam.pose();
-  r.var_x = slam.cov(0, 0);
-  r.var_y = slam.cov(1, 1);
-  const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
-                          wrap_angle(r.estimate.theta - r.truth.theta));
   Eigen::Matrix3d P;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
-  r.pose_nees = e.dot(P.ldlt().solve(e));
-  res.mean_abs_x_m += std::abs(e.x());
-  res.mean_abs_y_m += std::abs(e.y());
-  res.steps.push_back(r);
+  sc.pose(t_s, *truth, slam.pose(), P);
 }
 
 RunResult SlamSession::finish() {
   State& s = *st_;
-  RunResult res = s.res;
-  if (!res.steps.empty()) {
-    res.mean_abs_x_m /= static_cast<double>(res.steps.size());
-    res.mean_abs_y_m /= static_cast<double>(res.steps.size());
-  }
+  RunResult res = s.scorer->finish();
   const ekf::Slam<double, EB>& slam = s.step.slam();
   res.landmarks = slam.landmarks();
   for (int j = 0; j < res.landmarks; ++j) {
-    const int t = s.feature_truth[slam.id(j)];
+    const int t = s.scorer->truth_of(slam.id(j));
     res.map.push_back({slam.landmark(j).x(), slam.landmark(j).y(), t});
     res.spurious_in_map += t < 0;
   }
   return res;
 }
 
-RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt) {
+// ---------------------------------------------------------------------------------------------
+
+SimSource::SimSource(const Scenario& sc, std::uint64_t seed, int max_steps)
+    : sc_(sc), seed_(seed), max_steps_(max_steps) {
   const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
-  const Pose2<double> x0{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
-  const SensorModel sensor{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad};
-  SlamSession session(opt, sensor, sc.landmarks.size(), x0, Eigen::Matrix3d::Identity() * 1e-12);
-  const Eigen::Matrix2d R =
-      Eigen::Vector2d(sc.sigma_range_m * sc.sigma_range_m, sc.sigma_bearing_rad * sc.sigma_bearing_rad).asDiagonal();
-  Simulator sim(sc, seed);
-  SimStep step;
-  long k = 0;
-  while (sim.step(step) && (opt.max_steps == 0 || k < opt.max_steps)) {
-    ++k;
-    session.predict(step.v_mps, step.w_radps, sc.dt_s, sc.sigma_v_mps, sc.sigma_w_radps);
-    if (step.scan) session.scan(step.observations, R, step.t_s, &step.true_pose);
+  x0 = Pose2<double>{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
+  P0 = Eigen::Matrix3d::Identity() * 1e-12;
+  sensor = SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad};
+  true_landmarks = sc.landmarks.size();
+  rewind();
+}
+
+SimSource::~SimSource() = default;
+
+void SimSource::rewind() {
+  sim_ = std::make_unique<Simulator>(sc_, seed_);
+  k_ = 0;
+  scan_due_ = false;
+}
+
+bool SimSource::next(RunInput& in) {
+  if (scan_due_) {  // the scan at the end of the interval just predicted
+    scan_due_ = false;
+    in.scan = true;
+    in.observations = step_.observations;
+    in.R = Eigen::Vector2d(sc_.sigma_range_m * sc_.sigma_range_m, sc_.sigma_bearing_rad * sc_.sigma_bearing_rad)
+               .asDiagonal();
+    in.t_s = step_.t_s;
+    in.have_truth = true;
+    in.true_pose = step_.true_pose;
+    return true;
+  }
+  if (!sim_->step(step_) || (max_steps_ != 0 && k_ >= max_steps_)) return false;
+  ++k_;
+  in = prediction(sc_, step_);
+  scan_due_ = step_.scan;
+  return true;
+}
+
+RunInput SimSource::prediction(const Scenario& sc, const SimStep& step) {
+  RunInput in;
+  in.v_mps = step.v_mps;
+  in.w_radps = step.w_radps;
+  in.dt_s = sc.dt_s;
+  in.sigma_v_mps = sc.sigma_v_mps;
+  in.sigma_w_radps = sc.sigma_w_radps;
+  return in;
+}
+
+RecordedSource::RecordedSource(RunSource& src) {
+  sensor = src.sensor;
+  true_landmarks = src.true_landmarks;
+  x0 = src.x0;
+  P0 = src.P0;
+  RunInput in;
+  while (src.next(in)) inputs_.push_back(in);
+}
+
+bool RecordedSource::next(RunInput& in) {
+  if (at_ >= inputs_.size()) return false;
+  in = inputs_[at_++];
+  return true;
+}
+
+RunResult run_inputs(RunSource& src, const RunOptions& opt) {
+  SlamSession session(opt, src.sensor, src.true_landmarks, src.x0, src.P0);
+  RunInput in;
+  while (src.next(in)) {
+    if (in.scan) {
+      session.scan(in.observations, in.R, in.t_s, in.have_truth ? &in.true_pose : nullptr);
+    } else {
+      session.predict(in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps);
+    }
   }
   return session.finish();
+}
+
+RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt) {
+  SimSource src(sc, seed, opt.max_steps);
+  return run_inputs(src, opt);
 }
 
 }  // namespace geojcbb::host

@@ -1,6 +1,6 @@
 // geojcbb_device: the firmware's device loop (node::Node, float, DesktopBounds) on a serial port or
-// on a new pseudo-terminal, whose path it prints as "pty: PATH". Runs until SIGINT/SIGTERM or until
-// the port closes.
+// on a new pseudo-terminal, whose path it prints as "pty: PATH". Runs until SIGINT/SIGTERM, until
+// the port closes, or until a SHUTDOWN message, whose exit code it exits with.
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -25,7 +25,24 @@ int main(int argc, char** argv) {
   auto* p = app.add_option("--port", port, "serial port to serve (e.g. /dev/ttyUSB0)");
   app.add_flag("--pty", pty, "create a pseudo-terminal and print its path as 'pty: PATH'")->excludes(p);
   app.add_option("--baud", baud, "baud rate of --port")->default_val(baud);
+  std::string transport = "auto";
+  app.add_option("--transport", transport,
+                 "transport of --port: auto (termios for /dev/pts/*, else libserialport), termios or libserialport")
+      ->check(CLI::IsMember({"auto", "termios", "libserialport"}))
+      ->default_val(transport);
+  bool list = false;
+  app.add_flag("--list-ports", list, "print the serial ports libserialport finds and exit");
   CLI11_PARSE(app, argc, argv);
+  if (list) {
+    try {
+      for (const geojcbb::host::PortInfo& i : geojcbb::host::list_ports())
+        std::printf("%s\n", geojcbb::host::port_line(i).c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "geojcbb_device: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
   if (!pty && port.empty()) {
     std::fprintf(stderr, "geojcbb_device: give --pty or --port PATH\n");
     return 2;
@@ -42,10 +59,15 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       t = std::move(q);
     } else {
-      t = std::make_unique<geojcbb::host::PosixSerial>(port, baud);
+      t = geojcbb::host::open_transport(port, baud, geojcbb::host::parse_transport_kind(transport));
     }
-    const std::uint64_t bytes = geojcbb::host::serve_device(*t, g_stop, boot_id);
-    std::fprintf(stderr, "geojcbb_device: stopped after %llu bytes\n", static_cast<unsigned long long>(bytes));
+    const geojcbb::host::ServeResult r = geojcbb::host::serve_device(*t, g_stop, boot_id);
+    if (r.shutdown_code) {
+      std::fprintf(stderr, "geojcbb_device: SHUTDOWN with exit code %d after %llu bytes\n", *r.shutdown_code,
+                   static_cast<unsigned long long>(r.bytes));
+      return *r.shutdown_code;
+    }
+    std::fprintf(stderr, "geojcbb_device: stopped after %llu bytes\n", static_cast<unsigned long long>(r.bytes));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "geojcbb_device: %s\n", e.what());
     return 1;

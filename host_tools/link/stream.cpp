@@ -3,126 +3,205 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 
 namespace geojcbb::host {
 
-proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o) {
+proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o) {
   proto::Config c;
   c.strategy = static_cast<proto::StrategyCode>(s);
   c.confidence = static_cast<float>(o.confidence);
   c.new_landmark_level = static_cast<float>(o.new_landmark_gate);
-  c.local_radius_m = static_cast<float>(sc.max_range_m + o.compensation_m);
+  c.local_radius_m = static_cast<float>(sensor.max_range_m + o.compensation_m);
   c.groups = static_cast<std::uint8_t>(o.groups);
   c.condition_groups = o.condition_groups;
   c.node_budget = static_cast<std::uint32_t>(DesktopBounds::kMaxJcbbNodes);
-  c.min_range_m = static_cast<float>(sc.min_range_m + o.view_margin_m);
-  c.max_range_m = static_cast<float>(sc.max_range_m - o.view_margin_m);
-  c.half_fov_rad = static_cast<float>(0.5 * sc.fov_rad - 3 * sc.sigma_bearing_rad);
+  c.min_range_m = static_cast<float>(sensor.min_range_m + o.view_margin_m);
+  c.max_range_m = static_cast<float>(sensor.max_range_m - o.view_margin_m);
+  c.half_fov_rad = static_cast<float>(0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad);
   c.confirm_hits = static_cast<std::uint8_t>(o.landmark_policy.confirm_hits);
   c.max_misses = static_cast<std::uint8_t>(o.landmark_policy.max_misses);
   c.max_tentative_reviews = static_cast<std::uint8_t>(o.landmark_policy.max_tentative_reviews);
   return c;
 }
 
-proto::Reset link_reset(const Scenario& sc) {
-  const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
+proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o) {
+  return link_config(SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad}, s, o);
+}
+
+proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0) {
+  Eigen::Matrix3d P = P0;
+  for (int k = 0; k < 3; ++k) P(k, k) = std::max(P(k, k), 1e-6);
   proto::Reset r;
-  r.x_m = static_cast<float>(sc.waypoints[0].x());
-  r.y_m = static_cast<float>(sc.waypoints[0].y());
-  r.theta_rad = static_cast<float>(std::atan2(d.y(), d.x()));
-  r.cov_upper = {1e-6f, 0.0f, 0.0f, 1e-6f, 0.0f, 1e-6f};
+  r.x_m = static_cast<float>(x0.x);
+  r.y_m = static_cast<float>(x0.y);
+  r.theta_rad = static_cast<float>(x0.theta);
+  r.cov_upper = {static_cast<float>(P(0, 0)), static_cast<float>(P(0, 1)), static_cast<float>(P(0, 2)),
+                 static_cast<float>(P(1, 1)), static_cast<float>(P(1, 2)), static_cast<float>(P(2, 2))};
   return r;
 }
 
-proto::Odometry link_odometry(const Scenario& sc, const SimStep& step) {
+proto::Reset link_reset(const Scenario& sc) {
+  const SimSource src(sc, 0);
+  return link_reset(src.x0, src.P0);
+}
+
+proto::Odometry link_odometry(const RunInput& in) {
   proto::Odometry o;
-  o.v_mps = static_cast<float>(step.v_mps);
-  o.w_radps = static_cast<float>(step.w_radps);
-  o.dt_s = static_cast<float>(sc.dt_s);
-  o.sigma_v_mps = static_cast<float>(sc.sigma_v_mps);
-  o.sigma_w_radps = static_cast<float>(sc.sigma_w_radps);
+  o.v_mps = static_cast<float>(in.v_mps);
+  o.w_radps = static_cast<float>(in.w_radps);
+  o.dt_s = static_cast<float>(in.dt_s);
+  o.sigma_v_mps = static_cast<float>(in.sigma_v_mps);
+  o.sigma_w_radps = static_cast<float>(in.sigma_w_radps);
   return o;
 }
 
-LinkObsBatch link_batch(const Scenario& sc, const std::vector<SimObservation>& scan, std::uint32_t batch_id,
-                        std::vector<int>& kept) {
+proto::Odometry link_odometry(const Scenario& sc, const SimStep& step) {
+  return link_odometry(SimSource::prediction(sc, step));
+}
+
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Matrix2d& R, std::uint32_t batch_id,
+                        std::size_t max_obs, std::vector<int>& kept) {
   std::vector<SimObservation> s = scan;
   std::sort(s.begin(), s.end(), [](const auto& a, const auto& b) { return a.z.x() < b.z.x(); });
-  if (s.size() > kLinkMaxObs) s.resize(kLinkMaxObs);
+  if (s.size() > std::min(max_obs, kLinkMaxObs)) s.resize(std::min(max_obs, kLinkMaxObs));
   LinkObsBatch b;
   b.batch_id = batch_id;
   b.count = static_cast<std::uint8_t>(s.size());
   kept.clear();
   for (std::size_t i = 0; i < s.size(); ++i) {
-    b.obs[i] = proto::ObservationWire{static_cast<float>(s[i].z.x()), static_cast<float>(s[i].z.y()),
-                                      static_cast<float>(sc.sigma_range_m * sc.sigma_range_m), 0.0f,
-                                      static_cast<float>(sc.sigma_bearing_rad * sc.sigma_bearing_rad)};
+    b.obs[i] =
+        proto::ObservationWire{static_cast<float>(s[i].z.x()), static_cast<float>(s[i].z.y()),
+                               static_cast<float>(R(0, 0)), static_cast<float>(R(0, 1)), static_cast<float>(R(1, 1))};
     kept.push_back(s[i].truth);
   }
   return b;
 }
 
-RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
-                          const ScanHook& hook) {
-  link.configure(link_config(sc, s, o));
-  link.reset(link_reset(sc));
-  Simulator sim(sc, seed);
-  SimStep step;
-  RunResult res;
-  std::vector<int> feature_truth;                    // landmark id -> true landmark (-1 clutter)
-  std::vector<int> mapped(sc.landmarks.size(), 0);   // true landmark -> landmarks made from it (ever)
-  std::vector<int> kept;
-  std::uint32_t batch = 0;
-  long k = 0;
-  while (sim.step(step) && (o.max_steps == 0 || k < o.max_steps)) {
-    ++k;
-    link.odometry(link_odometry(sc, step));
-    if (!step.scan) continue;
-    const LinkObsBatch b = link_batch(sc, step.observations, batch++, kept);
-    const auto t0 = std::chrono::steady_clock::now();
-    const LinkClient::ScanReply r = link.scan(b);
-    res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (r.result.count != b.count || r.result.batch_id != b.batch_id || r.pose.batch_id != b.batch_id) {
-      throw LinkError("reply does not match batch " + std::to_string(b.batch_id));
+LinkObsBatch link_batch(const Scenario& sc, const std::vector<SimObservation>& scan, std::uint32_t batch_id,
+                        std::vector<int>& kept) {
+  const Eigen::Matrix2d R =
+      Eigen::Vector2d(sc.sigma_range_m * sc.sigma_range_m, sc.sigma_bearing_rad * sc.sigma_bearing_rad).asDiagonal();
+  return link_batch(scan, R, batch_id, kLinkMaxObs, kept);
+}
+
+namespace {
+
+struct InFlight {
+  LinkObsBatch batch;
+  std::vector<int> truth;  ///< of the batch's observations, in batch order
+  std::chrono::steady_clock::time_point sent;
+  double t_s;
+  bool have_truth;
+  Pose2<double> true_pose;
+};
+
+/// One attempt at a run: throws LinkError kRestart when the link asks for a new start.
+RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so) {
+  const proto::Capabilities& caps = link.capabilities();
+  const std::size_t device_obs = std::min<std::size_t>(kLinkMaxObs, caps.max_observations);
+  const std::size_t max_obs =
+      so.max_observations > 0 ? std::min(device_obs, static_cast<std::size_t>(so.max_observations)) : device_obs;
+  proto::Config c = link_config(src.sensor, o.strategy, o);
+  c.node_budget = std::min(c.node_budget, caps.max_jcbb_nodes);
+  link.configure(c);
+  link.reset(link_reset(src.x0, src.P0));
+  RunScorer scorer(src.true_landmarks, o.landmark_group);
+  RunResult& res = scorer.result();
+  const std::size_t window = static_cast<std::size_t>(std::max(1, so.window));
+  std::deque<InFlight> flight;
+  std::vector<FeatureId> paired;
+  bool noted_truncation = false;
+  int not_augmented = 0;
+  std::uint32_t next_batch = 0;
+
+  auto complete = [&]() {
+    InFlight& f = flight.front();
+    const LinkClient::ScanReply r = link.receive_scan(f.batch.batch_id);
+    res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - f.sent).count();
+    if (r.result.count != f.batch.count || r.result.batch_id != f.batch.batch_id ||
+        r.pose.batch_id != f.batch.batch_id) {
+      throw LinkError("reply does not match batch " + std::to_string(f.batch.batch_id));
     }
     ++res.scans;
-    res.observations += b.count;
-    for (std::size_t i = 0; i < b.count; ++i) {
-      const int t = kept[i];
+    paired.clear();
+    for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
-      if (q.outcome == proto::PairingOutcome::kPaired) {
-        const int ft = static_cast<std::size_t>(q.feature_id) < feature_truth.size() ? feature_truth[q.feature_id] : -3;
-        ++((t >= 0 && ft == t) ? res.score.tp : res.score.fp);
-      } else if (t >= 0 && mapped[t] > 0) {
-        ++res.score.fn;
-      } else {
-        ++res.score.tn;
-      }
-      if (q.outcome == proto::PairingOutcome::kNewLandmark) {
-        if (static_cast<std::size_t>(q.feature_id) >= feature_truth.size()) feature_truth.resize(q.feature_id + 1, -1);
-        feature_truth[q.feature_id] = t;
-        if (t >= 0) ++mapped[t];
-        else ++res.spurious_landmarks;
-      }
+      paired.push_back(q.outcome == proto::PairingOutcome::kPaired ? q.feature_id : -1);
     }
-    StepRecord sr;
-    sr.t_s = step.t_s;
-    sr.truth = step.true_pose;
-    sr.estimate = Pose2<double>{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
-    sr.var_x = r.pose.cov_upper[0];
-    sr.var_y = r.pose.cov_upper[3];
-    sr.pose_nees = 0;
-    res.mean_abs_x_m += std::abs(sr.estimate.x - sr.truth.x);
-    res.mean_abs_y_m += std::abs(sr.estimate.y - sr.truth.y);
-    res.steps.push_back(sr);
+    scorer.score(f.truth, paired);
+    for (std::size_t i = 0; i < f.batch.count; ++i) {
+      const proto::PairingWire& q = r.result.pairs[i];
+      if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
+      not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
+    }
+    if (f.have_truth) {
+      const auto& u = r.pose.cov_upper;
+      Eigen::Matrix3d P;
+      P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
+      scorer.pose(f.t_s, f.true_pose, Pose2<double>{r.pose.x_m, r.pose.y_m, r.pose.theta_rad}, P);
+    }
     res.landmarks = r.pose.landmark_count;
-    if (hook) hook(b, r);
+    if (so.hook) so.hook(f.batch, r);
+    flight.pop_front();
+  };
+
+  RunInput in;
+  while (src.next(in)) {
+    if (!in.scan) {
+      link.odometry(link_odometry(in));
+      continue;
+    }
+    InFlight f;
+    f.batch = link_batch(in.observations, in.R, next_batch++, max_obs, f.truth);
+    const int dropped = static_cast<int>(in.observations.size()) - static_cast<int>(f.batch.count);
+    if (dropped > 0) {
+      res.dropped_observations += dropped;
+      if (!noted_truncation && so.note && device_obs < kLinkMaxObs && max_obs == device_obs) {
+        so.note("the device takes at most " + std::to_string(max_obs) +
+                " observations per scan: the nearest are sent, the rest dropped (counted)");
+      }
+      noted_truncation = true;
+    }
+    f.t_s = in.t_s;
+    f.have_truth = in.have_truth;
+    f.true_pose = in.true_pose;
+    f.sent = std::chrono::steady_clock::now();
+    link.send_scan(f.batch);
+    flight.push_back(std::move(f));
+    if (flight.size() >= window) complete();
   }
-  if (!res.steps.empty()) {
-    res.mean_abs_x_m /= static_cast<double>(res.steps.size());
-    res.mean_abs_y_m /= static_cast<double>(res.steps.size());
+  while (!flight.empty()) complete();
+  if (not_augmented > 0 && so.note) {
+    so.note(std::to_string(not_augmented) + " observations were not added to the map: the device's map is full (" +
+            std::to_string(caps.max_landmarks) + " landmarks)");
   }
-  return res;
+  return scorer.finish();
+}
+
+}  // namespace
+
+RunResult stream_run(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so) {
+  link.begin_run();
+  for (;;) {
+    try {
+      return stream_once(link, src, o, so);
+    } catch (const LinkError& e) {
+      if (e.kind != LinkError::Kind::kRestart) throw;
+      src.rewind();  // the session said so (and limits how often)
+    }
+  }
+}
+
+RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
+                          const ScanHook& hook) {
+  RunOptions ro = o;
+  ro.strategy = s;
+  SimSource src(sc, seed, o.max_steps);
+  PlainLink pl(link);
+  StreamOptions so;
+  so.hook = hook;
+  return stream_run(pl, src, ro, so);
 }
 
 }  // namespace geojcbb::host

@@ -185,3 +185,227 @@ TEST_CASE("node: a lossy channel over 12,000 frames: faults counted exactly, no 
   node->on_bytes(one.data(), one.size());
   CHECK(!sink->bytes.empty());
 }
+
+namespace {
+using NodeB = Bounds<24, 32, 5, 4000, 64>;
+struct Reply {
+  std::uint8_t type;
+  std::vector<std::uint8_t> payload;
+};
+std::vector<Reply> replies(const std::vector<std::uint8_t>& bytes) {
+  std::vector<Reply> out;
+  proto::Decoder dec;
+  for (std::uint8_t b : bytes) {
+    proto::FrameView f;
+    if (dec.push(b, f) == proto::Error::kOk) {
+      out.push_back({f.type, std::vector<std::uint8_t>(f.payload, f.payload + f.len)});
+    }
+  }
+  return out;
+}
+template <class M>
+M decoded(const Reply& r) {
+  M m{};
+  REQUIRE(r.type == static_cast<std::uint8_t>(M::kType));
+  REQUIRE(m.decode(r.payload.data(), r.payload.size()) == proto::Error::kOk);
+  return m;
+}
+proto::Odometry test_odometry() {
+  proto::Odometry o;
+  o.v_mps = 0.5f;
+  o.dt_s = 0.1f;
+  o.sigma_v_mps = 0.05f;
+  o.sigma_w_radps = 0.01f;
+  return o;
+}
+proto::ObsBatchT<24> test_batch(int k) {
+  proto::ObsBatchT<24> b;
+  b.batch_id = static_cast<std::uint32_t>(100 + k);
+  b.count = 3;
+  for (int i = 0; i < 3; ++i) {
+    b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * k, -0.6f + 0.6f * i, 0.01f, 0.0f, 3e-4f};
+  }
+  return b;
+}
+struct Harness {
+  std::unique_ptr<node::Node<float, NodeB>> node = std::make_unique<node::Node<float, NodeB>>();
+  std::vector<std::uint8_t> out;
+  std::vector<int> shutdowns;  // exit codes, in call order
+  std::size_t out_at_shutdown = 0;
+  std::uint16_t seq = 0;
+  explicit Harness(bool with_hook = true) {
+    node->start(node::Output{this,
+                             [](void* c, const std::uint8_t* p, std::size_t n) {
+                               auto& b = static_cast<Harness*>(c)->out;
+                               b.insert(b.end(), p, p + n);
+                             },
+                             with_hook ? +[](void* c, std::uint8_t code) {
+                               auto* h = static_cast<Harness*>(c);
+                               h->shutdowns.push_back(code);
+                               h->out_at_shutdown = h->out.size();
+                             }
+                                       : nullptr},
+                7);
+  }
+  template <class M>
+  std::vector<std::uint8_t> frame(const M& m, std::uint16_t at) {
+    std::vector<std::uint8_t> f;
+    append(f, m, at);
+    return f;
+  }
+  template <class M>
+  void send(const M& m) {
+    const std::vector<std::uint8_t> f = frame(m, seq++);
+    node->on_bytes(f.data(), f.size());
+  }
+  void send_bytes(const std::vector<std::uint8_t>& f) { node->on_bytes(f.data(), f.size()); }
+  void open(std::uint16_t stats_period) {
+    send(proto::Hello{});
+    proto::Config c;
+    c.local_radius_m = 12.0f;
+    c.max_range_m = 10.0f;
+    c.stats_period_scans = stats_period;
+    send(c);
+    send(proto::Reset{});
+  }
+};
+}  // namespace
+
+TEST_CASE("node: periodic STATS after the POSE of every N-th scan since CONFIG or RESET") {
+  for (const std::uint16_t period : {0, 1, 3, 7}) {
+    CAPTURE(period);
+    Harness h;
+    h.open(period);
+    for (int k = 0; k < 10; ++k) {
+      h.send(test_odometry());
+      h.send(test_batch(k));
+    }
+    h.send(proto::Reset{});  // a new run: the count starts again
+    for (int k = 10; k < 14; ++k) {
+      h.send(test_odometry());
+      h.send(test_batch(k));
+    }
+    const std::vector<Reply> r = replies(h.out);
+    // CAPABILITIES, ACK, ACK, then per scan ASSOC_RESULT, POSE [, STATS]; an ACK for the second RESET.
+    std::size_t at = 3;
+    int stats_seen = 0;
+    for (int k = 0; k < 14; ++k) {
+      if (k == 10) CHECK(r.at(at++).type == static_cast<std::uint8_t>(proto::MsgType::kAck));
+      CHECK(decoded<proto::AssocResultT<24>>(r.at(at++)).batch_id == static_cast<std::uint32_t>(100 + k));
+      CHECK(decoded<proto::Pose>(r.at(at++)).batch_id == static_cast<std::uint32_t>(100 + k));
+      const int in_run = k < 10 ? k + 1 : k - 9;
+      if (period != 0 && in_run % period == 0) {
+        const proto::Stats st = decoded<proto::Stats>(r.at(at++));
+        CHECK(st.scans == static_cast<std::uint32_t>(k + 1));  // sent after this scan
+        ++stats_seen;
+      }
+    }
+    CHECK(at == r.size());  // nothing else
+    CHECK(stats_seen == (period == 0 ? 0 : 10 / period + 4 / period));
+  }
+}
+
+TEST_CASE("node: SHUTDOWN is acknowledged, then calls the board's hook once with the exit code") {
+  SUBCASE("not before HELLO") {
+    Harness h;
+    proto::Shutdown sd;
+    sd.exit_code = 5;
+    h.send(sd);
+    CHECK(h.shutdowns.empty());
+    const std::vector<Reply> r = replies(h.out);
+    REQUIRE(r.size() == 1);
+    const proto::ErrorReport e = decoded<proto::ErrorReport>(r[0]);
+    CHECK(e.error == proto::Error::kNotReady);
+    CHECK(e.offending_type == 0x09);
+  }
+  SUBCASE("after HELLO: ACK first, then the hook") {
+    Harness h;
+    h.send(proto::Hello{});
+    proto::Shutdown sd;
+    sd.exit_code = 42;
+    const std::uint16_t seq = h.seq;
+    h.send(sd);
+    REQUIRE(h.shutdowns.size() == 1);
+    CHECK(h.shutdowns[0] == 42);
+    const std::vector<Reply> r = replies(h.out);
+    REQUIRE(r.size() == 2);  // CAPABILITIES, ACK
+    const proto::Ack a = decoded<proto::Ack>(r[1]);
+    CHECK(a.acked_type == 0x09);
+    CHECK(a.acked_seq == seq);
+    CHECK(h.out_at_shutdown == h.out.size());  // the ACK was written before the hook ran
+  }
+  SUBCASE("without a hook it is only acknowledged") {
+    Harness h(false);
+    h.send(proto::Hello{});
+    h.send(proto::Shutdown{});
+    const std::vector<Reply> r = replies(h.out);
+    REQUIRE(r.size() == 2);
+    CHECK(decoded<proto::Ack>(r[1]).acked_type == 0x09);
+    h.send(proto::Ping{});  // still serving
+    CHECK(replies(h.out).size() == 3);
+  }
+  SUBCASE("a bad payload length is refused and counted, no hook") {
+    Harness h;
+    h.send(proto::Hello{});
+    const std::uint8_t two[2] = {1, 2};
+    proto::EncodedFrame f;
+    REQUIRE(proto::encode_frame(0x09, 9, 0, two, 2, f.bytes.data(), f.bytes.size(), f.size) == proto::Error::kOk);
+    h.node->on_bytes(f.bytes.data(), f.size);
+    CHECK(h.shutdowns.empty());
+    CHECK(h.node->stats().invalid_field == 1);
+  }
+}
+
+TEST_CASE("node: retransmitted stream frames are not applied twice, and the last batch's replies come again") {
+  // Reference: every frame once.
+  Harness ref;
+  ref.open(0);
+  std::vector<std::vector<std::uint8_t>> odo, bat;
+  Harness h;
+  h.open(0);
+  REQUIRE(h.seq == ref.seq);
+  for (int k = 0; k < 6; ++k) {
+    odo.push_back(h.frame(test_odometry(), static_cast<std::uint16_t>(h.seq + 2 * k)));
+    bat.push_back(h.frame(test_batch(k), static_cast<std::uint16_t>(h.seq + 2 * k + 1)));
+    ref.send_bytes(odo.back());
+    ref.send_bytes(bat.back());
+  }
+  // The device: scans 0 and 1, then scan 2 whose replies "were lost"; the host resends scan 2's
+  // ODOMETRY and OBS_BATCH with their original seq, then goes on.
+  for (int k = 0; k < 3; ++k) {
+    h.send_bytes(odo[static_cast<std::size_t>(k)]);
+    h.send_bytes(bat[static_cast<std::size_t>(k)]);
+  }
+  const std::size_t before = replies(h.out).size();
+  h.send_bytes(odo[2]);
+  h.send_bytes(bat[2]);
+  const std::vector<Reply> again = replies(h.out);
+  REQUIRE(again.size() == before + 2);  // the stored ASSOC_RESULT and POSE, not a second step
+  CHECK(again[before].payload == again[before - 2].payload);
+  CHECK(again[before + 1].payload == again[before - 1].payload);
+  CHECK(h.node->stats().scans == 3);
+  // A retransmission of an older batch (not the last) is neither applied nor answered.
+  h.send_bytes(odo[1]);
+  h.send_bytes(bat[1]);
+  CHECK(replies(h.out).size() == before + 2);
+  for (int k = 3; k < 6; ++k) {
+    h.send_bytes(odo[static_cast<std::size_t>(k)]);
+    h.send_bytes(bat[static_cast<std::size_t>(k)]);
+  }
+  CHECK(h.node->stats().scans == 6);
+  // Every fresh reply equals the reference's: the state never saw the duplicates.
+  std::vector<Reply> got = replies(h.out), want = replies(ref.out);
+  got.erase(got.begin() + static_cast<std::ptrdiff_t>(before), got.begin() + static_cast<std::ptrdiff_t>(before + 2));
+  REQUIRE(got.size() == want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    CHECK(got[i].type == want[i].type);
+    CHECK(got[i].payload == want[i].payload);
+  }
+  // After RESET the sequence starts afresh: an old seq is a new run's first frame.
+  h.send(proto::Reset{});
+  const std::size_t n = replies(h.out).size();
+  h.send_bytes(odo[0]);
+  h.send_bytes(bat[0]);
+  CHECK(replies(h.out).size() == n + 2);
+  CHECK(h.node->stats().scans == 7);
+}

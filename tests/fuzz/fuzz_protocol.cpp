@@ -69,6 +69,7 @@ void try_all(const std::uint8_t* p, std::size_t n, std::uint8_t type, std::uint1
   try_decode<Ping>(p, n, type, seq, fl);
   try_decode<Pong>(p, n, type, seq, fl);
   try_decode<Reset>(p, n, type, seq, fl);
+  try_decode<Shutdown>(p, n, type, seq, fl);
   try_decode<Odometry>(p, n, type, seq, fl);
   try_decode<ObsBatch>(p, n, type, seq, fl);
   try_decode<ObsBatchT<1>>(p, n, type, seq, fl);

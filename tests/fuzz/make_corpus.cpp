@@ -112,6 +112,9 @@ int main(int argc, char** argv) {
   Reset reset{};
   reset.x_m = 1.0f;
   reset.cov_upper = {0.1f, 0.01f, 0.0f, 0.1f, 0.0f, 0.01f};
+  Shutdown shutdown{};
+  shutdown.exit_code = 3;
+  cfg.stats_period_scans = 10;
   Odometry odo{};
   odo.v_mps = 0.5f;
   odo.w_radps = 0.1f;
@@ -146,6 +149,7 @@ int main(int argc, char** argv) {
   save("valid_ping", frame(ping));
   save("valid_pong", frame(pong));
   save("valid_reset", frame(reset, 3, flags::kAckRequested));
+  save("valid_shutdown", frame(shutdown, 4));
   save("valid_odometry", frame(odo));
   save("valid_obs_batch_0", frame(batch(0)));
   save("valid_obs_batch_3", frame(batch(3)));

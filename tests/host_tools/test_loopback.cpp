@@ -122,9 +122,54 @@ TEST_CASE("loopback: the device refuses work before the handshake and a wrong sc
                               f.bytes.size(), f.size) == proto::Error::kOk);
   port.write(f.bytes.data(), f.size);
   CHECK_THROWS_WITH_AS(link.stats(), doctest::Contains("seq 77: out-of-range"), LinkError);
-  const proto::Stats st = link.stats();
+  // The answer to that request was queued behind the ERROR; a PING's wait reads past it and keeps
+  // it as the latest STATS: it counts CONFIG before HELLO, HELLO, the bad CONFIG and the request.
+  link.ping(1);
+  REQUIRE(link.last_stats().has_value());
+  CHECK(link.last_stats()->invalid_field == 1);
+  CHECK(link.last_stats()->frames_ok == 4);
+  const proto::Stats st = link.stats();  // a fresh answer: the PING and this request too
   CHECK(st.invalid_field == 1);
-  // The first STATS (answering the first request, queued behind the ERROR) counts CONFIG before
-  // HELLO, HELLO, the bad CONFIG and that request.
-  CHECK(st.frames_ok == 4);
+  CHECK(st.frames_ok == 6);
+}
+
+TEST_CASE("loopback: periodic STATS reach last_stats() between replies, and SHUTDOWN ends serving with its code") {
+  Scenario sc = load_scenario(std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json");
+  Pty pty;
+  std::atomic<bool> stop{false};
+  ServeResult served;
+  std::thread device([&] { served = serve_device(pty, stop, 0x5EED); });
+  {
+    PosixSerial port(pty.slave_path());
+    LinkClient link(port, 2000);
+    CHECK_THROWS_WITH_AS(link.shutdown(3), doctest::Contains("not-ready"), LinkError);  // not before HELLO
+    link.hello();
+    CHECK_FALSE(link.last_stats().has_value());
+    proto::Config c = link_config(sc, Strategy::kGeojcbb, RunOptions{});
+    c.stats_period_scans = 10;
+    link.configure(c);
+    link.reset(link_reset(sc));
+    Simulator sim(sc, 1);
+    SimStep step;
+    std::vector<int> kept;
+    std::uint32_t batch = 0;
+    while (batch < 35 && sim.step(step)) {
+      link.odometry(link_odometry(sc, step));
+      if (!step.scan) continue;
+      const LinkClient::ScanReply r = link.scan(link_batch(sc, step.observations, batch, kept));
+      CHECK(r.result.batch_id == batch);
+      ++batch;
+    }
+    // STATS after scans 10, 20 and 30; the last is read while waiting for scan 31's reply.
+    CHECK(link.stats_received() == 3);
+    REQUIRE(link.last_stats().has_value());
+    CHECK(link.last_stats()->scans == 30);
+    CHECK(link.stats().scans == 35);
+    CHECK(link.last_stats()->scans == 35);
+    link.ping(0xABCD);
+    link.shutdown(7);
+  }
+  device.join();  // the device stopped by itself
+  REQUIRE(served.shutdown_code.has_value());
+  CHECK(*served.shutdown_code == 7);
 }

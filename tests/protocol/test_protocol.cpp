@@ -63,6 +63,7 @@ Config sample<Config>() {
   c.confirm_hits = 2;
   c.max_misses = 4;
   c.max_tentative_reviews = 6;
+  c.stats_period_scans = 0x1234;
   return c;
 }
 template <>
@@ -100,6 +101,12 @@ Reset sample<Reset>() {
   r.theta_rad = 0.3f;
   r.cov_upper = {0.04f, 0.001f, -0.002f, 0.05f, 0.003f, 0.01f};
   return r;
+}
+template <>
+Shutdown sample<Shutdown>() {
+  Shutdown s{};
+  s.exit_code = 0xA7;
+  return s;
 }
 template <>
 Odometry sample<Odometry>() {
@@ -391,8 +398,8 @@ TEST_CASE("protocol: little-endian header and fields, golden PING frame") {
 }
 
 TEST_CASE_TEMPLATE("protocol: round trip of every message, whole and one byte at a time", M, Hello, Capabilities,
-                   Config, Ack, Nack, Ping, Pong, Reset, Odometry, ObsBatch, AssocResult, Pose, StatsRequest, Stats,
-                   ErrorReport) {
+                   Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Odometry, ObsBatch, AssocResult, Pose, StatsRequest,
+                   Stats, ErrorReport) {
   const M m = sample<M>();
   const Bytes payload = payload_of(m);
   CHECK(payload.size() == m.payload_size());
@@ -1063,7 +1070,7 @@ TEST_CASE("protocol: HELLO version and schema hash") {
   CHECK(kSchemaHash == fnv1a32(kSchemaText, kSchemaTextLength));
   // Pinned: if this fails, the schema text changed. That is the point: update docs/protocol.md
   // (hash value) and make sure both ends are rebuilt.
-  CHECK(kSchemaHash == 0xBE811E97u);
+  CHECK(kSchemaHash == 0xF5420CF3u);
   Hello h{};
   CHECK(check_hello(h) == Error::kOk);
   h.protocol_version = 2;
@@ -1075,6 +1082,48 @@ TEST_CASE("protocol: HELLO version and schema hash") {
   std::string text(kSchemaText, kSchemaTextLength);
   text[text.find("OBS_BATCH")] = 'o';
   CHECK(fnv1a32(text.data(), text.size()) != kSchemaHash);
+}
+
+TEST_CASE("protocol: SHUTDOWN and CONFIG's periodic STATS on the wire") {
+  // CONFIG's last field, after the 39 bytes of the first version.
+  const std::vector<Field> cf = schema_fields(MsgType::kConfig);
+  REQUIRE(cf.back().name == "stats_period_scans");
+  CHECK(cf.back().type == "u16");
+  CHECK(cf.back().offset == 39);
+  Config c = sample<Config>();
+  c.stats_period_scans = 0x0102;
+  const Bytes pl = payload_of(c);
+  REQUIRE(pl.size() == 41);
+  CHECK(pl[39] == 0x02);
+  CHECK(pl[40] == 0x01);
+  CHECK(Config{}.stats_period_scans == 0);  // off unless asked for
+  Config out{};
+  REQUIRE(out.decode(pl.data(), pl.size()) == Error::kOk);
+  CHECK(out.stats_period_scans == 0x0102);
+  CHECK(out.decode(pl.data(), 39) == Error::kBadLength);  // a first-version CONFIG is refused
+  // SHUTDOWN: type 0x09, one byte, any exit code.
+  CHECK(static_cast<std::uint8_t>(Shutdown::kType) == 0x09);
+  CHECK(is_known_type(0x09));
+  CHECK(std::string(to_string(MsgType::kShutdown)) == "SHUTDOWN");
+  for (int code = 0; code < 256; ++code) {
+    Shutdown sd{};
+    sd.exit_code = static_cast<std::uint8_t>(code);
+    const Bytes b = payload_of(sd);
+    REQUIRE(b.size() == 1);
+    CHECK(b[0] == code);
+    Shutdown back{};
+    CHECK(back.decode(b.data(), b.size()) == Error::kOk);
+    CHECK(back.exit_code == code);
+  }
+  Shutdown sd = sample<Shutdown>();
+  CHECK(sd.decode(nullptr, 0) == Error::kBadLength);
+  const Bytes two = {1, 2};
+  CHECK(sd.decode(two.data(), two.size()) == Error::kBadLength);
+  CHECK(sd.exit_code == sample<Shutdown>().exit_code);
+  // The schema states the session rules a reconnecting host relies on.
+  const std::string text(kSchemaText, kSchemaTextLength);
+  CHECK(text.find("stream_applied_once_by_seq_since=CONFIG,RESET") != std::string::npos);
+  CHECK(text.find("acked=CONFIG,RESET,SHUTDOWN") != std::string::npos);
 }
 
 TEST_CASE("protocol: message counters classify rejections") {

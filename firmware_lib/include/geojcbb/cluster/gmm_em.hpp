@@ -62,7 +62,7 @@ T e_step(const Points<T, B>& pts, int m, T floor, EmWorkspace<T, B>& ws) {
     const Mat2<T>& S = ws.sigma[q];
     const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
     inv[q] << S(1, 1) / det, -S(0, 1) / det, -S(1, 0) / det, S(0, 0) / det;
-    log_norm[q] = ws.log_pi[q] - T(kLog2Pi) - T(0.5) * std::log(det);
+    log_norm[q] = ws.log_pi[q] - T(kLog2Pi) - T(0.5) * fmath::log(det);
     penalty += T(0.5) * floor * (inv[q](0, 0) + inv[q](1, 1));
   }
   T ll = T(0);
@@ -75,9 +75,9 @@ T e_step(const Points<T, B>& pts, int m, T floor, EmWorkspace<T, B>& ws) {
       if (lp > mx) mx = lp;
     }
     T sum = T(0);
-    for (int q = 0; q < ws.k; ++q) sum += std::exp(ws.gamma[j][q] - mx);  // <= kMaxGroups
-    const T lse = mx + std::log(sum);
-    for (int q = 0; q < ws.k; ++q) ws.gamma[j][q] = std::exp(ws.gamma[j][q] - lse);  // <= kMaxGroups
+    for (int q = 0; q < ws.k; ++q) sum += fmath::exp(ws.gamma[j][q] - mx);  // <= kMaxGroups
+    const T lse = mx + fmath::log(sum);
+    for (int q = 0; q < ws.k; ++q) ws.gamma[j][q] = fmath::exp(ws.gamma[j][q] - lse);  // <= kMaxGroups
     ll += lse;
   }
   ws.ll = ll;
@@ -104,7 +104,7 @@ void m_step(const Points<T, B>& pts, int m, T floor, EmWorkspace<T, B>& ws) {
     }
     ws.mu[kept] = mu;
     ws.sigma[kept] = S / n;
-    ws.log_pi[kept] = std::log(n / static_cast<T>(m));
+    ws.log_pi[kept] = fmath::log(n / static_cast<T>(m));
     for (int j = 0; j < m; ++j) ws.gamma[j][kept] = ws.gamma[j][q];  // <= kMaxObservations
     ++kept;
   }

@@ -28,7 +28,7 @@ using Points = std::array<Vec2<T>, B::kMaxObservations>;
 template <typename T, class B>
 void observation_points(const Observations<T, B>& obs, Points<T, B>& pts) {
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
-    pts[i] = Vec2<T>(obs.z[i].x() * std::cos(obs.z[i].y()), obs.z[i].x() * std::sin(obs.z[i].y()));
+    pts[i] = Vec2<T>(obs.z[i].x() * fmath::cos(obs.z[i].y()), obs.z[i].x() * fmath::sin(obs.z[i].y()));
   }
 }
 

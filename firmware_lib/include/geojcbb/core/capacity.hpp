@@ -28,7 +28,15 @@ struct Bounds {
 };
 
 /// Controller-class default: 24 observations per scan, 32 candidates in the local region, 5 groups,
-/// 4000 JCBB nodes per scan, 64 landmarks in the map.
-using DefaultBounds = Bounds<24, 32, 5, 4000, 64>;
+/// 4000 JCBB nodes per scan, 48 landmarks in the map. The float device loop at these bounds
+/// (node::Node, all memory static) needs about 110 KB of RAM and fits, with a 4 KiB stack, in
+/// 128 KiB; at 64 landmarks it needed 150 KB (the covariance alone grows as (3 + 2n)^2 floats).
+/// See docs/firmware.md.
+using DefaultBounds = Bounds<24, 32, 5, 4000, 48>;
+
+/// The Cortex-M4F firmware's other configurations (firmware_lib/port/mps2_an386, docs/firmware.md):
+/// a smaller part, and a large one with the desktop device's capacity (a whole env1 lap fits).
+using SmallControllerBounds = Bounds<16, 24, 4, 2000, 32>;
+using LargeControllerBounds = Bounds<24, 64, 5, 20000, 200>;
 
 }  // namespace geojcbb

@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 
+#include "geojcbb/core/fmath.hpp"
+
 namespace geojcbb {
 
 template <typename T> using Vec2 = Eigen::Matrix<T, 2, 1>;

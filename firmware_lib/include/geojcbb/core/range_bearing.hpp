@@ -29,7 +29,7 @@ Vec2<T> observe(const Pose2<T>& x_r, const Vec2<T>& l, Mat23<T>* J_z_pose = null
   const T dy = l.y() - x_r.y;
   const T q = dx * dx + dy * dy;
   const T r = std::sqrt(q);
-  const Vec2<T> z(r, wrap_angle(std::atan2(dy, dx) - x_r.theta));
+  const Vec2<T> z(r, wrap_angle(fmath::atan2(dy, dx) - x_r.theta));
   if (J_z_landmark != nullptr || J_z_pose != nullptr) {
     Mat2<T> J_l;
     J_l << dx / r, dy / r,  //
@@ -51,8 +51,8 @@ template <typename T>
 Vec2<T> inverse_observe(const Pose2<T>& x_r, const Vec2<T>& z, Mat23<T>* J_l_pose = nullptr,
                         Mat2<T>* J_l_z = nullptr) {
   const T a = x_r.theta + z.y();
-  const T c = std::cos(a);
-  const T s = std::sin(a);
+  const T c = fmath::cos(a);
+  const T s = fmath::sin(a);
   const Vec2<T> l(x_r.x + z.x() * c, x_r.y + z.x() * s);
   if (J_l_pose != nullptr) {
     *J_l_pose << T(1), T(0), -z.x() * s,  //

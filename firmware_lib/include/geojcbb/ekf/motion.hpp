@@ -24,8 +24,8 @@ struct Odometry {
 template <typename T>
 Pose2<T> move(const Pose2<T>& x, const Odometry<T>& u, Mat3<T>* J_x_pose = nullptr, Mat32<T>* J_x_u = nullptr) {
   const T a = x.theta + T(0.5) * u.w_radps * u.dt_s;
-  const T c = std::cos(a);
-  const T s = std::sin(a);
+  const T c = fmath::cos(a);
+  const T s = fmath::sin(a);
   const T d = u.v_mps * u.dt_s;
   if (J_x_pose != nullptr) {
     *J_x_pose << T(1), T(0), -d * s,  //

@@ -1,13 +1,19 @@
 // node: the device loop. Portable, no OS: the board feeds received bytes to on_bytes() and supplies
 // a write function; the Node decodes frames (protocol/), runs the handshake, CONFIG and RESET, and for
 // each ODOMETRY + OBS_BATCH predicts, associates with the configured strategy, updates, augments and
-// answers ASSOC_RESULT and POSE. STATS on request. The same code runs in a desktop process (over a
-// pseudo-terminal) and on the Cortex-M4F (over the UART).
+// answers ASSOC_RESULT and POSE. STATS on request and periodically. The same code runs in a desktop
+// process (over a pseudo-terminal) and on the Cortex-M4F (over the UART).
 //   before HELLO:   only HELLO and PING are served; anything else gets ERROR kNotReady
 //   HELLO           version and schema hash checked: CAPABILITIES, or NACK
 //   CONFIG, RESET   ACK, or NACK with the reason (nothing changes)
+//   SHUTDOWN        ACK, then the board's shutdown hook (Output::shutdown) with the exit code
 //   ODOMETRY        predict (needs CONFIG and RESET first)
-//   OBS_BATCH       one SLAM step: ASSOC_RESULT then POSE, or ERROR (nothing changes)
+//   OBS_BATCH       one SLAM step: ASSOC_RESULT then POSE, or ERROR (nothing changes); then STATS
+//                   when CONFIG's stats_period_scans is N > 0 and this is the N-th scan since the last
+//   retransmission  a stream frame (ODOMETRY, OBS_BATCH) whose seq is not newer than the last applied
+//                   one since CONFIG/RESET is not applied again; a repeated OBS_BATCH of the last
+//                   applied batch id gets its stored ASSOC_RESULT and POSE again (a host that lost
+//                   replies resends its pending frames with their original seq)
 // Frames that fail the framing checks are counted by the decoder and not answered (their seq is not
 // trustworthy); frames of unknown type or with invalid fields are counted and answered with ERROR.
 // No heap: every buffer is a member, sized by the Bounds; the object is typically static.
@@ -21,10 +27,13 @@
 
 namespace geojcbb::node {
 
-/// The board's output: writes n bytes (blocking or buffered; the Node does not retry).
+/// The board's output: writes n bytes (blocking or buffered; the Node does not retry), and an
+/// optional shutdown hook, called after the ACK of a SHUTDOWN has been written (nullptr: SHUTDOWN is
+/// only acknowledged). Both get `context`.
 struct Output {
   void* context = nullptr;
   void (*write)(void* context, const std::uint8_t* data, std::size_t n) = nullptr;
+  void (*shutdown)(void* context, std::uint8_t exit_code) = nullptr;
 };
 
 /// CONFIG's fields as the SLAM step's settings (validated by SlamStep::configure).
@@ -89,6 +98,7 @@ class Node {
     boot_id_ = boot_id;
     clock_ = clock;
     hello_ = configured_ = reset_ = false;
+    new_run();
   }
 
   /// Feeds received bytes.  Bound: n bytes, each O(1) except a frame's end (one message).
@@ -152,6 +162,7 @@ class Node {
       case proto::MsgType::kPing: e = serve<proto::Ping>(f); break;
       case proto::MsgType::kConfig: e = serve<proto::Config>(f); break;
       case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
+      case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
       case proto::MsgType::kStatsRequest: e = serve<proto::StatsRequest>(f); break;
       case proto::MsgType::kObsBatch:
@@ -201,6 +212,8 @@ class Node {
       return;
     }
     configured_ = true;
+    stats_period_ = m.stats_period_scans;
+    new_run();
     ack();
   }
 
@@ -215,19 +228,37 @@ class Node {
       return;
     }
     reset_ = true;
+    new_run();
     ack();
   }
 
+  void on_message(const proto::Shutdown& m) {
+    if (!ready()) return;
+    ack();
+    if (out_.shutdown != nullptr) out_.shutdown(out_.context, m.exit_code);
+  }
+
   void on_message(const proto::Odometry& m) {
-    if (!running()) return;
+    if (!running() || !fresh()) return;  // a retransmitted ODOMETRY was applied already
     const std::uint32_t t0 = clock_ ? clock_() : 0;
     const Status st = step_.predict(odometry_from<T>(m));
     last_predict_ = clock_ ? clock_() - t0 : 0;
-    if (st != Status::kOk) invalid();
+    if (st != Status::kOk) {
+      invalid();
+      return;
+    }
+    applied();
   }
 
   void on_message(const ObsBatch& m) {
     if (!running()) return;
+    if (!fresh()) {  // retransmitted: never stepped twice; the last batch's replies are sent again
+      if (have_result_ && m.batch_id == result_.batch_id) {
+        send(result_);
+        send(pose_);
+      }
+      return;
+    }
     if (observations_from(m, obs_) != Status::kOk) {
       invalid();
       return;
@@ -250,8 +281,10 @@ class Node {
       q.d2 = static_cast<float>(last_.d2[i]);
     }
     send(result_);
+    applied();
+    have_result_ = true;
     const ekf::Slam<T, B>& s = step_.slam();
-    proto::Pose p;
+    proto::Pose& p = pose_;
     p.batch_id = m.batch_id;
     p.x_m = static_cast<float>(s.x(0));
     p.y_m = static_cast<float>(s.x(1));
@@ -260,10 +293,28 @@ class Node {
                    static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
     p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
     send(p);
+    if (stats_period_ != 0 && ++since_stats_ >= stats_period_) {
+      since_stats_ = 0;
+      send(stats());
+    }
   }
 
   void on_message(const proto::StatsRequest&) { send(stats()); }
 
+  // A new run (start, CONFIG, RESET): stream sequence numbers and the periodic STATS count restart.
+  void new_run() {
+    have_stream_seq_ = have_result_ = false;
+    since_stats_ = 0;
+  }
+  // True when the current stream frame is newer than the last applied one (serial numbers, RFC 1982:
+  // a retransmission carries its original seq, never newer).
+  bool fresh() const {
+    return !have_stream_seq_ || static_cast<std::int16_t>(static_cast<std::uint16_t>(rx_seq_ - last_stream_seq_)) > 0;
+  }
+  void applied() {
+    last_stream_seq_ = rx_seq_;
+    have_stream_seq_ = true;
+  }
   bool ready() {
     if (hello_) return true;
     error(proto::Error::kNotReady);
@@ -310,16 +361,17 @@ class Node {
   Observations<T, B> obs_;
   StepResult<T, B> last_;
   ObsBatch rx_batch_;
-  AssocResult result_;
+  AssocResult result_;  ///< the last batch's, kept for a retransmitted OBS_BATCH
+  proto::Pose pose_;    ///< likewise
   proto::Decoder decoder_;
   proto::MessageCounters msg_counters_;
   proto::EncodedFrame frame_;
   Output out_;
   CounterFn clock_ = nullptr;
   std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, last_predict_ = 0, stack_high_water_ = 0;
-  std::uint16_t tx_seq_ = 0, rx_seq_ = 0;
+  std::uint16_t tx_seq_ = 0, rx_seq_ = 0, last_stream_seq_ = 0, stats_period_ = 0, since_stats_ = 0;
   std::uint8_t rx_type_ = 0;
-  bool hello_ = false, configured_ = false, reset_ = false;
+  bool hello_ = false, configured_ = false, reset_ = false, have_stream_seq_ = false, have_result_ = false;
 };
 
 }  // namespace geojcbb::node

@@ -112,8 +112,10 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f) {
       std::snprintf(bounds, sizeof bounds, "  [%5.3f, %5.3f]", r.anees_lo, r.anees_hi);
     }
     if (std::isfinite(r.nees_inside)) std::snprintf(inside, sizeof inside, "%10.1f%%", 100 * r.nees_inside);
-    std::fprintf(f, "  %-8s %10.4f %10.4f %10.3f %18s %12s %10.1f %10.1f\n", r.name.c_str(), r.abs_x, r.abs_y, r.anees,
-                 bounds, inside, r.landmarks, r.spurious_in_map);
+    char spurious[24] = "         -";  // a device does not report its map
+    if (std::isfinite(r.spurious_in_map)) std::snprintf(spurious, sizeof spurious, "%10.1f", r.spurious_in_map);
+    std::fprintf(f, "  %-8s %10.4f %10.4f %10.3f %18s %12s %10.1f %s\n", r.name.c_str(), r.abs_x, r.abs_y, r.anees,
+                 bounds, inside, r.landmarks, spurious);
   }
   for (const ReportRow& r : rows) {
     if (r.failed > 0) std::fprintf(f, "  %s: %d runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());

@@ -55,6 +55,15 @@ struct MrclamNoise {
 /// about +-0.6 rad).
 SensorModel mrclam_sensor(const MrclamNoise& n);
 
+/// One robot's log as a run's inputs: predictions from the odometry (held as described above) and
+/// one scan per camera frame, R from the noise, the truth pose where ground truth covers the time.
+/// Throws std::runtime_error for a log without odometry or ground truth.
+class MrclamSource : public RecordedSource {
+ public:
+  MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamNoise& noise,
+               bool drop_other_robots = false);
+};
+
 /// One robot's replay. Throws std::runtime_error as run_slam does.
 /// drop_other_robots: measurements of robots (subjects 1-5) are removed before
 /// association instead of being fed as clutter.
@@ -72,6 +81,8 @@ struct MrclamOptions {
   double noise_inflation = 1.5;                     ///< on the data's robust spreads (their tails are heavy)
   int jobs = 0;                                     ///< worker threads (0: the number of cores)
   bool drop_other_robots = false;                   ///< see replay_robot
+  /// Runs each replay's inputs (empty: in process, run_inputs); a device over the link needs jobs = 1.
+  RunInputsFn runner;
 };
 
 /// Every strategy on every robot of every dataset: tables on stdout, mrclam.csv

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -97,6 +98,110 @@ struct SensorModel {
   double min_range_m = 0, max_range_m = 30, fov_rad = 3.14159265358979, sigma_bearing_rad = 0.0175;
 };
 
+/// The evaluation's scoring of one run, in one place: the in-process SlamSession and a device's
+/// replies over the serial link (host_tools/link) both use it. Per scan, score() classifies each
+/// observation (TP/FP/FN/TN, and the same at landmark-group level) from its truth and the landmark it
+/// was paired with; added() and removed() keep the map's landmark ids -> true landmarks; pose()
+/// records the pose error and the (x, y, theta) NEES; finish() takes the means.
+class RunScorer {
+ public:
+  /// Truth of a landmark id that has left the map, and of an id never reported as added.
+  static constexpr int kRemoved = -2, kUnknown = -3;
+  /// @param landmark_group  true landmark -> group (empty: each landmark its own group)
+  RunScorer(std::size_t true_landmarks, std::vector<int> landmark_group);
+  /// One scan, before the filter's update. truth[i]: the observation's true landmark (index, or -1
+  /// for clutter); paired[i]: the landmark id it was paired with, or < 0 when not paired.
+  void score(const std::vector<int>& truth, const std::vector<FeatureId>& paired);
+  /// Landmark `id` was made from an observation of true landmark `truth` (-1: clutter).
+  void added(FeatureId id, int truth);
+  /// Landmark `id` left the map (tentative, missed in view).
+  void removed(FeatureId id);
+  /// True landmark of `id`: an index, -1 (clutter), kRemoved, or kUnknown.
+  int truth_of(FeatureId id) const;
+  /// Landmark ids handed out so far (ids are 0, 1, ... in order of creation).
+  std::size_t ids() const { return feature_truth_.size(); }
+  /// The pose estimate at a scan against the truth; P over (x, y, theta).
+  void pose(double t_s, const Pose2<double>& truth, const Pose2<double>& estimate, const Eigen::Matrix3d& P);
+  RunResult& result() { return res_; }
+  /// The result with mean_abs_x_m / mean_abs_y_m divided by the scans with a true pose.
+  RunResult finish() const;
+
+ private:
+  int cls(int t) const { return landmark_group_.empty() ? t : landmark_group_[static_cast<std::size_t>(t)]; }
+  std::vector<int> feature_truth_;   ///< landmark id -> true landmark it came from (-1 clutter)
+  std::vector<int> mapped_;          ///< true landmark -> map landmarks made from it, still mapped
+  std::vector<int> landmark_group_;  ///< true landmark -> its group
+  RunResult res_;
+};
+
+/// One input of a run, in time order: a prediction (odometry over dt and its noise) or a scan.
+struct RunInput {
+  bool scan = false;
+  double v_mps = 0, w_radps = 0, dt_s = 0, sigma_v_mps = 0, sigma_w_radps = 0;  ///< prediction
+  std::vector<SimObservation> observations;         ///< scan: (range, bearing), each with its truth
+  Eigen::Matrix2d R = Eigen::Matrix2d::Identity();  ///< scan: every observation's covariance
+  double t_s = 0;                                   ///< scan time
+  bool have_truth = false;                          ///< true_pose is known
+  Pose2<double> true_pose{};
+};
+
+/// A run's inputs (the simulator's, or a MRCLAM robot's log) with what the filter starts from; fed
+/// to the in-process filter (run_inputs) or streamed to a device (host_tools/link, stream_run).
+class RunSource {
+ public:
+  virtual ~RunSource() = default;
+  /// The next input; false after the last.
+  virtual bool next(RunInput& in) = 0;
+  /// Back to the first input (a run that restarts gives the same inputs again).
+  virtual void rewind() = 0;
+  SensorModel sensor;
+  std::size_t true_landmarks = 0;
+  Pose2<double> x0{};
+  Eigen::Matrix3d P0 = Eigen::Matrix3d::Identity();
+};
+
+/// Inputs held in memory: a MRCLAM replay's, or another source's recorded (so a benchmark times
+/// the filter or the link, not the simulator).
+class RecordedSource : public RunSource {
+ public:
+  RecordedSource() = default;
+  /// Every input of `source` (from its current position), with its sensor and start.
+  explicit RecordedSource(RunSource& source);
+  bool next(RunInput& in) override;
+  void rewind() override { at_ = 0; }
+  const std::vector<RunInput>& inputs() const { return inputs_; }
+
+ protected:
+  std::vector<RunInput> inputs_;
+
+ private:
+  std::size_t at_ = 0;
+};
+
+/// The simulator's inputs for one seed: per control interval a prediction, then the scan when one
+/// was taken. At most max_steps control intervals (0: the whole path).
+class SimSource : public RunSource {
+ public:
+  SimSource(const Scenario& scenario, std::uint64_t seed, int max_steps = 0);
+  ~SimSource() override;
+  bool next(RunInput& in) override;
+  void rewind() override;
+  /// The prediction of a simulator step: its odometry over the scenario's dt and noise.
+  static RunInput prediction(const Scenario& scenario, const SimStep& step);
+
+ private:
+  const Scenario& sc_;
+  std::uint64_t seed_;
+  int max_steps_;
+  std::unique_ptr<Simulator> sim_;
+  SimStep step_;
+  long k_ = 0;
+  bool scan_due_ = false;
+};
+
+/// The in-process filter's capacity (SlamSession): observations per scan, landmarks in the map.
+constexpr int kEvalMaxObservations = 48, kEvalMaxLandmarks = 400;
+
 /// One EKF-SLAM run fed step by step (the simulator and the MRCLAM replay both
 /// drive it): predict with odometry; per scan associate, score against the
 /// observations' truth, update, augment and review the landmarks. Host
@@ -125,6 +230,11 @@ class SlamSession {
  private:
   std::unique_ptr<State> st_;
 };
+
+/// Runs a source's inputs through a SlamSession. Throws as SlamSession does.
+RunResult run_inputs(RunSource& source, const RunOptions& options);
+/// Who runs a run's inputs: run_inputs in process, or a device over the link (geojcbb_eval --port).
+using RunInputsFn = std::function<RunResult(RunSource&, const RunOptions&)>;
 
 /// Runs one seed of one scenario. Throws std::runtime_error when the map
 /// capacity is exceeded or a library call fails (the message names the call and

@@ -1,9 +1,15 @@
-// host_tools/link: a simulated scenario as link messages, and a run of it through a device, scored
-// like the evaluation (TP/TN/FP/FN as in docs/evaluation.md, pose error against the truth).
+// host_tools/link: a run's inputs (the simulator's or a MRCLAM log's, geojcbb_host/slam_run.hpp) as
+// link messages, and a run of them through a device, scored by the evaluation's RunScorer
+// (TP/TN/FP/FN as in docs/evaluation.md, pose error and NEES against the truth).
+//   ScanLink     what the streaming needs of a link: LinkClient (one port, no recovery) or
+//                LinkSession (reconnects, re-handshakes, resends, restarts runs; session.hpp).
+//   stream_run   CONFIG, RESET, then per prediction ODOMETRY and per scan OBS_BATCH; up to
+//                `window` batches in flight, replies matched by batch id and scored in order.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "geojcbb_host/link.hpp"
@@ -11,18 +17,76 @@
 
 namespace geojcbb::host {
 
+/// CONFIG for a sensor and the evaluation's options (the same settings SlamSession derives).
+proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o);
 proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o);
+/// RESET at x0 with P0, each diagonal element at least 1e-6 (the float filter's floor).
+proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0);
 proto::Reset link_reset(const Scenario& sc);
+proto::Odometry link_odometry(const RunInput& prediction);
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step);
-/// The scan's observations, nearest first, at most kLinkMaxObs (`kept` receives their truths).
+/// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with covariance
+/// R; `kept` receives their truths.
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Matrix2d& R, std::uint32_t batch_id,
+                        std::size_t max_obs, std::vector<int>& kept);
 LinkObsBatch link_batch(const Scenario& sc, const std::vector<SimObservation>& scan, std::uint32_t batch_id,
                         std::vector<int>& kept);
 
-/// What a device answered for one scan, with the scan's truths.
+/// What the streaming needs of a link. LinkClient fails on the first fault; LinkSession recovers,
+/// and throws LinkError kRestart when the run must start again from its first input.
+class ScanLink {
+ public:
+  virtual ~ScanLink() = default;
+  /// A run begins (not called again when it restarts).
+  virtual void begin_run() {}
+  virtual void configure(const proto::Config& c) = 0;
+  virtual void reset(const proto::Reset& r) = 0;
+  virtual void odometry(const proto::Odometry& o) = 0;
+  virtual void send_scan(const LinkObsBatch& b) = 0;
+  virtual LinkClient::ScanReply receive_scan(std::uint32_t batch_id) = 0;
+  /// The device's CAPABILITIES (capacity, boot id).
+  virtual const proto::Capabilities& capabilities() const = 0;
+};
+
+/// A LinkClient as a ScanLink (no recovery).
+class PlainLink : public ScanLink {
+ public:
+  explicit PlainLink(LinkClient& c) : c_(c) {}
+  void configure(const proto::Config& c) override { c_.configure(c); }
+  void reset(const proto::Reset& r) override { c_.reset(r); }
+  void odometry(const proto::Odometry& o) override { c_.odometry(o); }
+  void send_scan(const LinkObsBatch& b) override { c_.send_scan(b); }
+  LinkClient::ScanReply receive_scan(std::uint32_t id) override { return c_.receive_scan(id); }
+  const proto::Capabilities& capabilities() const override { return c_.capabilities(); }
+
+ private:
+  LinkClient& c_;
+};
+
+/// What a device answered for one scan, with the batch sent.
 using ScanHook = std::function<void(const LinkObsBatch&, const LinkClient::ScanReply&)>;
 
-/// Streams one seed of a scenario through a device: CONFIG, RESET, then per control interval
-/// ODOMETRY and per scan OBS_BATCH, scoring each ASSOC_RESULT. Throws LinkError on a link failure.
+struct StreamOptions {
+  int window = 1;  ///< batches in flight (>= 1); the device's results do not depend on it
+  /// At most this many observations per scan (the nearest; 0: as many as the device takes).
+  int max_observations = 0;
+  /// Called with every scored reply, in batch order (not for replies of a run that restarted).
+  ScanHook hook;
+  /// Notes for the user (truncated batches); default: none.
+  std::function<void(const std::string&)> note;
+};
+
+/// Streams a run's inputs through a device: CONFIG (strategy and options of `o`), RESET, then
+/// ODOMETRY per prediction and OBS_BATCH per scan, each batch truncated to the device's
+/// max_observations (nearest first; RunResult::dropped_observations counts the rest). Replies are
+/// scored with RunScorer as the in-process run is, except that the device does not report which
+/// landmarks left the map (a true landmark counts as mapped once a landmark was made from it) nor
+/// its final map. RunResult::association_s sums each batch's time from sending to its reply.
+/// A LinkError kRestart from the link rewinds the source and starts the run again.
+/// Throws LinkError on a link failure, and when a reply does not match its batch.
+RunResult stream_run(ScanLink& link, RunSource& source, const RunOptions& o, const StreamOptions& so = {});
+
+/// stream_run over one seed of a simulated scenario (window 1).
 RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
                           const ScanHook& hook = nullptr);
 

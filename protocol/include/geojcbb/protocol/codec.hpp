@@ -91,6 +91,7 @@ template <std::size_t MaxObs = kDefaultMaxObsPerBatch, class Visitor>
     case MsgType::kPing: return run(Ping{});
     case MsgType::kPong: return run(Pong{});
     case MsgType::kReset: return run(Reset{});
+    case MsgType::kShutdown: return run(Shutdown{});
     case MsgType::kOdometry: return run(Odometry{});
     case MsgType::kObsBatch: return run(ObsBatchT<MaxObs>{});
     case MsgType::kAssocResult: return run(AssocResultT<MaxObs>{});

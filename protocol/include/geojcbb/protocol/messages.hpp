@@ -28,6 +28,7 @@ enum class MsgType : std::uint8_t {
   kPing = 0x06,
   kPong = 0x07,
   kReset = 0x08,         ///< host -> device, acknowledged
+  kShutdown = 0x09,      ///< host -> device, acknowledged, then the board's shutdown hook
   kOdometry = 0x10,      ///< host -> device, stream
   kObsBatch = 0x11,      ///< host -> device, stream
   kAssocResult = 0x20,   ///< device -> host
@@ -37,15 +38,15 @@ enum class MsgType : std::uint8_t {
   kError = 0x7F,         ///< device -> host
 };
 
-constexpr std::array<MsgType, 15> kAllMsgTypes = {
-    MsgType::kHello,    MsgType::kCapabilities, MsgType::kConfig,      MsgType::kAck,
-    MsgType::kNack,     MsgType::kPing,         MsgType::kPong,        MsgType::kReset,
-    MsgType::kOdometry, MsgType::kObsBatch,     MsgType::kAssocResult, MsgType::kPose,
-    MsgType::kStatsRequest, MsgType::kStats,    MsgType::kError};
+constexpr std::array<MsgType, 16> kAllMsgTypes = {
+    MsgType::kHello,    MsgType::kCapabilities, MsgType::kConfig,   MsgType::kAck,
+    MsgType::kNack,     MsgType::kPing,         MsgType::kPong,     MsgType::kReset,
+    MsgType::kShutdown, MsgType::kOdometry,     MsgType::kObsBatch, MsgType::kAssocResult,
+    MsgType::kPose,     MsgType::kStatsRequest, MsgType::kStats,    MsgType::kError};
 
 /// True when t is a type number of this schema.
 constexpr bool is_known_type(std::uint8_t t) {
-  for (const MsgType k : kAllMsgTypes) {  // <= 15
+  for (const MsgType k : kAllMsgTypes) {  // <= 16
     if (static_cast<std::uint8_t>(k) == t) return true;
   }
   return false;
@@ -61,6 +62,7 @@ constexpr const char* to_string(MsgType t) {
     case MsgType::kPing: return "PING";
     case MsgType::kPong: return "PONG";
     case MsgType::kReset: return "RESET";
+    case MsgType::kShutdown: return "SHUTDOWN";
     case MsgType::kOdometry: return "ODOMETRY";
     case MsgType::kObsBatch: return "OBS_BATCH";
     case MsgType::kAssocResult: return "ASSOC_RESULT";
@@ -289,7 +291,7 @@ constexpr std::uint8_t kStrategyCodeCount = 6;
 /// policy. Domain checks only; the device also checks its capacities (groups, node budget).
 struct Config : Codec<Config> {
   static constexpr MsgType kType = MsgType::kConfig;
-  static constexpr std::size_t kPayloadSize = 39;
+  static constexpr std::size_t kPayloadSize = 41;
   static constexpr std::size_t kMaxPayloadSize = kPayloadSize;
 
   StrategyCode strategy = StrategyCode::kGeojcbb;
@@ -307,6 +309,9 @@ struct Config : Codec<Config> {
   std::uint8_t confirm_hits = 2;     ///< hits that confirm a tentative landmark, >= 1
   std::uint8_t max_misses = 3;       ///< misses in view that remove a tentative landmark, >= 1
   std::uint8_t max_tentative_reviews = 5;  ///< reviews a landmark may stay tentative, >= 1
+  /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
+  /// (0: only on request).
+  std::uint16_t stats_period_scans = 0;
 
   [[nodiscard]] Error validate() const {
     const float f[] = {confidence, new_landmark_level, local_radius_m, dbscan_eps_m,
@@ -338,6 +343,7 @@ struct Config : Codec<Config> {
     w.u8(confirm_hits);
     w.u8(max_misses);
     w.u8(max_tentative_reviews);
+    w.u16(stats_period_scans);
   }
   [[nodiscard]] Error read(const std::uint8_t* p, std::size_t n) {
     if (n != kPayloadSize) return Error::kBadLength;
@@ -361,6 +367,7 @@ struct Config : Codec<Config> {
     confirm_hits = r.u8();
     max_misses = r.u8();
     max_tentative_reviews = r.u8();
+    stats_period_scans = r.u16();
     return Error::kOk;
   }
 };
@@ -470,6 +477,27 @@ struct Reset : Codec<Reset> {
     y_m = r.f32();
     theta_rad = r.f32();
     detail::read_cov(r, cov_upper);
+    return Error::kOk;
+  }
+};
+
+/// SHUTDOWN, host -> device (acknowledged, only after HELLO): the device answers ACK, then calls the
+/// board's shutdown hook with exit_code (the desktop device exits with it; the Cortex-M4F port ends
+/// QEMU through semihosting). A board without a hook only acknowledges.
+struct Shutdown : Codec<Shutdown> {
+  static constexpr MsgType kType = MsgType::kShutdown;
+  static constexpr std::size_t kPayloadSize = 1;
+  static constexpr std::size_t kMaxPayloadSize = kPayloadSize;
+
+  std::uint8_t exit_code = 0;  ///< any
+
+  [[nodiscard]] Error validate() const { return Error::kOk; }
+  [[nodiscard]] std::size_t payload_size() const { return kPayloadSize; }
+  void write(Writer& w) const { w.u8(exit_code); }
+  [[nodiscard]] Error read(const std::uint8_t* p, std::size_t n) {
+    if (n != kPayloadSize) return Error::kBadLength;
+    Reader r(p, n);
+    exit_code = r.u8();
     return Error::kOk;
   }
 };
@@ -798,7 +826,7 @@ constexpr bool matches_schema_list() {
   return s.found && s.fixed_bytes == M::kFixedSize && s.item_bytes == M::kItemSize;
 }
 constexpr bool all_types_in_schema() {
-  for (const MsgType t : kAllMsgTypes) {  // <= 15
+  for (const MsgType t : kAllMsgTypes) {  // <= 16
     if (!schema_layout(static_cast<std::uint8_t>(t)).found) return false;
   }
   return true;
@@ -812,6 +840,7 @@ static_assert(detail::matches_schema_fixed<Nack>());
 static_assert(detail::matches_schema_fixed<Ping>());
 static_assert(detail::matches_schema_fixed<Pong>());
 static_assert(detail::matches_schema_fixed<Reset>());
+static_assert(detail::matches_schema_fixed<Shutdown>());
 static_assert(detail::matches_schema_fixed<Odometry>());
 static_assert(detail::matches_schema_list<ObsBatch>());
 static_assert(detail::matches_schema_list<AssocResult>());

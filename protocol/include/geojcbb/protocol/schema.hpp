@@ -16,6 +16,8 @@ namespace geojcbb::proto {
 // Grammar: one item per line. "msg 0xTT NAME field:type{range} ... [repeat field:type ...]".
 // Types: u8 u16 u32 i32 f32 (little-endian, IEEE-754 binary32) and c16 (16 bytes of text).
 // "repeat" starts the per-item fields of a counted list; the count is the preceding "count:u8".
+// The "session" line states the device's rules that a host relies on (what is served before HELLO,
+// what is acknowledged, how retransmitted stream frames are treated, when STATS comes unasked).
 inline constexpr char kSchemaText[] =
     "geojcbb serial protocol major=1\n"
     "frame cobs delimiter=0x00 ver:u8 flags:u8 type:u8 reserved:u8{sent-as-0,ignored} seq:u16 len:u16 payload crc32c:u32 "
@@ -24,6 +26,9 @@ inline constexpr char kSchemaText[] =
     "errors 0=ok 1=incomplete 2=bad_length 3=bad_crc 4=overrun 5=bad_version 6=bad_flags 7=unknown_type "
     "8=wrong_type 9=non_finite 10=out_of_range 11=capacity_exceeded 12=not_positive_definite "
     "13=buffer_too_small 14=schema_mismatch 15=not_ready 16=internal\n"
+    "session before_HELLO=HELLO,PING acked=CONFIG,RESET,SHUTDOWN stream=ODOMETRY,OBS_BATCH "
+    "stream_applied_once_by_seq_since=CONFIG,RESET duplicate_last_OBS_BATCH=stored_reply "
+    "periodic_STATS=after_POSE_every_stats_period_scans\n"
     "msg 0x01 HELLO protocol_version:u8 schema_hash:u32\n"
     "msg 0x02 CAPABILITIES protocol_version:u8 schema_hash:u32 max_observations:u16{>=1} "
     "max_candidates:u16{>=1} max_groups:u8{>=1} max_landmarks:u16{>=1} max_jcbb_nodes:u32{>=1} "
@@ -31,13 +36,15 @@ inline constexpr char kSchemaText[] =
     "msg 0x03 CONFIG strategy:u8{0..5} confidence:f32{(0,1)} new_landmark_level:f32{(0,1)} "
     "local_radius_m:f32{>0} groups:u8 condition_groups:u8{0|1} dbscan_eps_m:f32{>0} "
     "dbscan_min_points:u8{>=1} node_budget:u32{>=1} min_range_m:f32{>=0} max_range_m:f32{>min} "
-    "half_fov_rad:f32{(0,pi]} confirm_hits:u8{>=1} max_misses:u8{>=1} max_tentative_reviews:u8{>=1}\n"
+    "half_fov_rad:f32{(0,pi]} confirm_hits:u8{>=1} max_misses:u8{>=1} max_tentative_reviews:u8{>=1} "
+    "stats_period_scans:u16{0=off}\n"
     "msg 0x04 ACK acked_type:u8 acked_seq:u16\n"
     "msg 0x05 NACK nacked_type:u8 nacked_seq:u16 error:u8{2..16}\n"
     "msg 0x06 PING nonce:u32\n"
     "msg 0x07 PONG nonce:u32\n"
     "msg 0x08 RESET x_m:f32 y_m:f32 theta_rad:f32 p00:f32 p01:f32 p02:f32 p11:f32 p12:f32 p22:f32 "
     "{finite,positive-definite}\n"
+    "msg 0x09 SHUTDOWN exit_code:u8\n"
     "msg 0x10 ODOMETRY v_mps:f32 w_radps:f32 dt_s:f32{>=0} sigma_v_mps:f32{>=0} sigma_w_radps:f32{>=0} "
     "{finite}\n"
     "msg 0x11 OBS_BATCH batch_id:u32 count:u8{<=capacity} repeat range_m:f32{>=0} bearing_rad:f32{[-pi,pi]} "

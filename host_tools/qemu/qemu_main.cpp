@@ -1,0 +1,179 @@
+// geojcbb_qemu: the firmware on an emulated Cortex-M4F. Starts QEMU (mps2-an386) with the firmware
+// ELF halted, finds the UART's pty through QMP, opens it, lets the CPU run, handshakes and streams a
+// simulated scenario for each strategy, printing the same score table as the desktop loop
+// (geojcbb_link). With --check every ASSOC_RESULT and POSE is compared, bit for bit, with the same
+// node running in float in this process; with --budget each scan's instruction counts (STATS under
+// -icount) are collected and summarised. Ends with SHUTDOWN: the firmware exits QEMU through
+// semihosting with status 0.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <strings.h>
+
+#include <CLI/CLI.hpp>
+
+#include "geojcbb_host/mirror.hpp"
+#include "geojcbb_host/qemu.hpp"
+#include "geojcbb_host/stream.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::host;
+
+namespace {
+
+struct Budget {
+  std::vector<std::uint32_t> associate, step;
+};
+
+std::uint32_t median(std::vector<std::uint32_t> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+std::uint32_t maximum(const std::vector<std::uint32_t>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+
+template <class B>
+bool matches(const proto::Capabilities& c) {
+  return c.max_observations == B::kMaxObservations && c.max_candidates == B::kMaxCandidates &&
+         c.max_groups == B::kMaxGroups && c.max_landmarks == B::kMaxLandmarks &&
+         c.max_jcbb_nodes == static_cast<std::uint32_t>(B::kMaxJcbbNodes);
+}
+
+// One strategy over the link, optionally mirrored by the in-process node with bounds B.
+template <class B>
+RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
+                  bool check, bool budget, int timeout_ms, MirrorReport& mirror_report, Budget& b) {
+  std::unique_ptr<MirrorTransport<B>> mirror;
+  if (check) mirror = std::make_unique<MirrorTransport<B>>(port, false);
+  Transport& t = check ? static_cast<Transport&>(*mirror) : port;
+  LinkClient link(t, timeout_ms);
+  link.hello();  // the client learns the device's capacity; the mirror's node gets its HELLO too
+  ScanHook hook = nullptr;
+  if (budget) {
+    hook = [&](const LinkObsBatch&, const LinkClient::ScanReply&) {
+      const proto::Stats st = link.stats();
+      b.associate.push_back(st.instr_associate);
+      b.step.push_back(st.instr_step);
+    };
+  }
+  const RunResult r = stream_scenario(link, sc, seed, s, o, hook);
+  if (mirror) mirror_report = mirror->report();
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"geojcbb_qemu: stream a simulated scenario through the Cortex-M4F firmware on QEMU's mps2-an386"};
+  QemuOptions q;
+  q.elf = GEOJCBB_FIRMWARE_ELF;
+  std::string scenario = std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json", budget_csv;
+  std::vector<std::string> names;
+  std::uint64_t seed = 1;
+  int timeout_ms = 20000;
+  bool check = false, budget = false;
+  RunOptions o;
+  app.add_option("--elf", q.elf, "firmware image")->default_val(q.elf);
+  app.add_option("--qemu", q.qemu, "QEMU program")->default_val(q.qemu);
+  app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
+  app.add_option("--strategies", names, "strategies, comma separated (default: all six)")->delimiter(',');
+  app.add_option("--seed", seed, "simulation seed")->default_val(seed);
+  app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);
+  app.add_option("--timeout-ms", timeout_ms, "wait for each reply at most this long")->default_val(timeout_ms);
+  app.add_flag("--check", check,
+               "compare every ASSOC_RESULT and POSE, bit for bit, with the same node run in float in this process");
+  app.add_flag("--budget", budget, "collect each scan's instruction counts (STATS after every scan)");
+  app.add_option("--budget-csv", budget_csv, "write per-scan instruction counts here (implies --budget)");
+  CLI11_PARSE(app, argc, argv);
+  budget = budget || !budget_csv.empty();
+  int rc = 0;
+  try {
+    const Scenario sc = load_scenario(scenario);
+    QemuMachine machine(q);
+    // Open the pty before the CPU runs: QEMU drops UART output while nobody holds it.
+    PosixSerial port(machine.pty());
+    machine.cont();
+    proto::Capabilities caps;
+    {
+      LinkClient hello(port, 2000);
+      caps = hello.hello(10);  // waits on the handshake itself, no sleep
+    }
+    std::printf("firmware %s on %s (%s)\n  boot id %08x, %d-byte scalars, up to %u observations, %u candidates, %u "
+                "landmarks, %u JCBB nodes; schema %08x\n",
+                q.elf.c_str(), machine.pty().c_str(), q.machine.c_str(), caps.boot_id, caps.scalar_bytes,
+                caps.max_observations, caps.max_candidates, caps.max_landmarks, caps.max_jcbb_nodes, caps.schema_hash);
+    const bool small = matches<SmallControllerBounds>(caps), dflt = matches<DefaultBounds>(caps),
+               large = matches<LargeControllerBounds>(caps);
+    if (check && !small && !dflt && !large) throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
+    std::vector<Strategy> strategies;
+    for (int k = 0; k < kStrategyCount; ++k) {
+      const Strategy s = static_cast<Strategy>(k);
+      bool take = names.empty();
+      for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
+      if (take) strategies.push_back(s);
+    }
+    std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),
+                static_cast<unsigned long long>(seed));
+    std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %9s %s\n", "strategy", "scans", "TP", "TN", "FP",
+                "FN", "precision", "recall", "F1", "|x err| m", "|y err| m", "scans/s", check ? "bit-for-bit" : "");
+    std::vector<Budget> budgets;
+    std::ofstream csv;
+    if (!budget_csv.empty()) {
+      csv.open(budget_csv);
+      csv << "scenario,strategy,scan,instr_associate,instr_step\n";
+    }
+    for (Strategy s : strategies) {
+      MirrorReport mr;
+      Budget b;
+      const auto t0 = std::chrono::steady_clock::now();
+      const RunResult r = small ? run_one<SmallControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
+                          : dflt ? run_one<DefaultBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
+                                 : run_one<LargeControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b);
+      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::string verdict;
+      if (check) {
+        verdict = mr.mismatched == 0 ? "equal (" + std::to_string(mr.assoc_results) + " results, " +
+                                           std::to_string(mr.poses) + " poses)"
+                                     : std::to_string(mr.mismatched) + " DIFFER; first: " + mr.first_mismatch;
+        if (mr.mismatched != 0 || mr.assoc_results != static_cast<std::uint64_t>(r.scans)) rc = 1;
+      }
+      std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %9.0f %s\n", to_string(s), r.scans,
+                  r.score.tp, r.score.tn, r.score.fp, r.score.fn, r.score.precision(), r.score.recall(), r.score.f1(),
+                  r.mean_abs_x_m, r.mean_abs_y_m, r.scans / secs, verdict.c_str());
+      std::fflush(stdout);
+      if (csv.is_open()) {
+        for (std::size_t i = 0; i < b.step.size(); ++i) {
+          csv << sc.name << ',' << to_string(s) << ',' << i << ',' << b.associate[i] << ',' << b.step[i] << '\n';
+        }
+      }
+      budgets.push_back(std::move(b));
+    }
+    if (budget) {
+      std::printf("instructions per scan (-icount shift=0; median / max over %s's scans)\n", sc.name.c_str());
+      std::printf("  %-8s %14s %14s %14s %14s\n", "strategy", "assoc median", "assoc max", "step median", "step max");
+      for (std::size_t k = 0; k < strategies.size(); ++k) {
+        const Budget& b = budgets[k];
+        std::printf("  %-8s %14u %14u %14u %14u\n", to_string(strategies[k]), median(b.associate),
+                    maximum(b.associate), median(b.step), maximum(b.step));
+      }
+    }
+    LinkClient link(port, timeout_ms);
+    const proto::Stats st = link.stats();
+    std::printf("firmware STATS: frames ok %u, bad CRC %u, bad length %u, overrun %u, unknown type %u, invalid field "
+                "%u, scans %u, budget hits %u, stack high-water %u bytes\n",
+                st.frames_ok, st.bad_crc, st.bad_length, st.overrun, st.unknown_type, st.invalid_field, st.scans,
+                st.budget_hits, st.stack_high_water_bytes);
+    link.shutdown(0);
+    const int status = machine.wait_exit(20000);
+    std::printf("QEMU exited with status %d (the firmware's semihosting exit)\n", status);
+    if (status != 0) rc = 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "geojcbb_qemu: %s\n", e.what());
+    rc = 1;
+  }
+  return rc;
+}
