@@ -8,7 +8,6 @@
 //               the in-process rate of the same run
 // and the round trip of a PING over the same link. The results of every window must be the same
 // (the device processes in order); the program says so, or fails. Timing is reported, never asserted.
-#include <strings.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -148,16 +147,10 @@ int main(int argc, char** argv) {
     for (int w : windows) std::printf("   link w=%-2d scans/s (ratio)", w);
     std::printf("\n");
     int status = 0;
-    for (const std::string& name : names) {
+    for (const Strategy strategy : select_strategies(names)) {
+      const std::string name = to_string(strategy);
       RunOptions o;
-      bool found = false;
-      for (int k = 0; k < kStrategyCount; ++k) {
-        if (strcasecmp(name.c_str(), to_string(static_cast<Strategy>(k))) == 0) {
-          o.strategy = static_cast<Strategy>(k);
-          found = true;
-        }
-      }
-      if (!found) throw std::runtime_error("unknown strategy " + name);
+      o.strategy = strategy;
       std::vector<Messages> msgs;
       for (RecordedSource& s : sources) msgs.push_back(messages(s, o, max_obs));
       double best_in = 1e30;

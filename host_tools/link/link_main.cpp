@@ -2,7 +2,6 @@
 // comes back (the evaluation's TP/TN/FP/FN and pose error). Without --port it starts
 // geojcbb_device --pty beside itself, reads the pty's path and connects (the desktop loop), and at
 // the end shuts it down with SHUTDOWN. The link reconnects and restarts runs as LinkSession does.
-#include <strings.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -49,13 +48,7 @@ int main(int argc, char** argv) {
     const Scenario sc = load_scenario(scenario);
     DeviceLink dl(lc, lc.port.empty());
     std::printf("%s\n", dl.describe().c_str());
-    std::vector<Strategy> strategies;
-    for (int k = 0; k < kStrategyCount; ++k) {
-      const Strategy s = static_cast<Strategy>(k);
-      bool take = names.empty();
-      for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
-      if (take) strategies.push_back(s);
-    }
+    const std::vector<Strategy> strategies = select_strategies(names);
     std::printf("%s, seed %llu, streamed over the link, %d scan(s) in flight\n", sc.name.c_str(),
                 static_cast<unsigned long long>(seed), lc.window);
     std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %12s\n", "strategy", "scans", "TP", "TN", "FP", "FN",

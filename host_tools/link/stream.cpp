@@ -4,8 +4,27 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <stdexcept>
+
+#include <strings.h>
 
 namespace geojcbb::host {
+
+std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
+  std::vector<Strategy> out;
+  for (const std::string& n : names) {
+    bool known = false;
+    for (int k = 0; k < kStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
+    if (!known) throw std::invalid_argument("unknown strategy " + n);
+  }
+  for (int k = 0; k < kStrategyCount; ++k) {
+    const Strategy s = static_cast<Strategy>(k);
+    bool take = names.empty();
+    for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
+    if (take) out.push_back(s);
+  }
+  return out;
+}
 
 proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o) {
   proto::Config c;

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include <strings.h>
 
 #include <CLI/CLI.hpp>
 
@@ -26,7 +25,11 @@ using namespace geojcbb::host;
 namespace {
 
 struct Budget {
-  std::vector<std::uint32_t> associate, step;
+  std::vector<std::uint32_t> associate, step, observations;
+  std::vector<std::uint32_t> associate20;  ///< association of scans with at least 20 observations
+  std::vector<std::uint32_t> budget_hit;   ///< association of scans that hit the JCBB node budget
+  std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
+  bool started = false;
 };
 
 std::uint32_t median(std::vector<std::uint32_t> v) {
@@ -54,10 +57,15 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
   link.hello();  // the client learns the device's capacity; the mirror's node gets its HELLO too
   ScanHook hook = nullptr;
   if (budget) {
-    hook = [&](const LinkObsBatch&, const LinkClient::ScanReply&) {
+    hook = [&](const LinkObsBatch& batch, const LinkClient::ScanReply&) {
       const proto::Stats st = link.stats();
       b.associate.push_back(st.instr_associate);
       b.step.push_back(st.instr_step);
+      b.observations.push_back(batch.count);
+      if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
+      if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
+      b.hits_before = st.budget_hits;
+      b.started = true;
     };
   }
   const RunResult r = stream_scenario(link, sc, seed, s, o, hook);
@@ -109,13 +117,7 @@ int main(int argc, char** argv) {
     const bool small = matches<SmallControllerBounds>(caps), dflt = matches<DefaultBounds>(caps),
                large = matches<LargeControllerBounds>(caps);
     if (check && !small && !dflt && !large) throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
-    std::vector<Strategy> strategies;
-    for (int k = 0; k < kStrategyCount; ++k) {
-      const Strategy s = static_cast<Strategy>(k);
-      bool take = names.empty();
-      for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
-      if (take) strategies.push_back(s);
-    }
+    const std::vector<Strategy> strategies = select_strategies(names);
     std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),
                 static_cast<unsigned long long>(seed));
     std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %9s %s\n", "strategy", "scans", "TP", "TN", "FP",
@@ -124,7 +126,7 @@ int main(int argc, char** argv) {
     std::ofstream csv;
     if (!budget_csv.empty()) {
       csv.open(budget_csv);
-      csv << "scenario,strategy,scan,instr_associate,instr_step\n";
+      csv << "scenario,strategy,scan,observations,instr_associate,instr_step\n";
     }
     for (Strategy s : strategies) {
       MirrorReport mr;
@@ -147,18 +149,28 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       if (csv.is_open()) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
-          csv << sc.name << ',' << to_string(s) << ',' << i << ',' << b.associate[i] << ',' << b.step[i] << '\n';
+          csv << '"' << sc.name << "\"," << to_string(s) << ',' << i << ',' << b.observations[i] << ','
+              << b.associate[i] << ',' << b.step[i] << '\n';
         }
       }
       budgets.push_back(std::move(b));
     }
     if (budget) {
       std::printf("instructions per scan (-icount shift=0; median / max over %s's scans)\n", sc.name.c_str());
-      std::printf("  %-8s %14s %14s %14s %14s\n", "strategy", "assoc median", "assoc max", "step median", "step max");
+      std::printf("  %-8s %13s %13s %13s %13s %9s %13s %13s\n", "strategy", "assoc median", "assoc max",
+                  "step median", "step max", "scans>=20", "assoc20 med", "assoc20 max");
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
-        std::printf("  %-8s %14u %14u %14u %14u\n", to_string(strategies[k]), median(b.associate),
-                    maximum(b.associate), median(b.step), maximum(b.step));
+        std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", to_string(strategies[k]), median(b.associate),
+                    maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(),
+                    median(b.associate20), maximum(b.associate20));
+      }
+      for (std::size_t k = 0; k < strategies.size(); ++k) {
+        const Budget& b = budgets[k];
+        if (!b.budget_hit.empty()) {
+          std::printf("  %-8s %zu scans hit the JCBB node budget (%u nodes); their association: max %u instructions\n",
+                      to_string(strategies[k]), b.budget_hit.size(), caps.max_jcbb_nodes, maximum(b.budget_hit));
+        }
       }
     }
     LinkClient link(port, timeout_ms);

@@ -10,6 +10,7 @@
 
 #include "geojcbb/node/node.hpp"
 #include "geojcbb_host/stream.hpp"
+#include "support/pty_device.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -21,16 +22,7 @@ std::uint32_t bits(float f) {
   return u;
 }
 
-struct Device {
-  Pty pty;
-  std::atomic<bool> stop{false};
-  std::thread thread;
-  explicit Device(std::uint32_t boot_id) : thread([this, boot_id] { serve_device(pty, stop, boot_id); }) {}
-  ~Device() {
-    stop = true;
-    thread.join();
-  }
-};
+using Device = geojcbb::test::PtyDevice;
 }  // namespace
 
 TEST_CASE("loopback: a whole env1 run over a pty equals the in-process float pipeline, bit for bit") {

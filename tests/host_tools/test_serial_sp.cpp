@@ -22,6 +22,7 @@
 
 #include "geojcbb_host/stream.hpp"
 #include "support/sp_pty_shim.hpp"
+#include "support/pty_device.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -72,16 +73,7 @@ std::vector<std::uint8_t> pattern(std::size_t n, std::uint32_t seed) {
   return v;
 }
 
-struct Device {
-  Pty pty;
-  std::atomic<bool> stop{false};
-  std::thread thread;
-  explicit Device(std::uint32_t boot_id) : thread([this, boot_id] { serve_device(pty, stop, boot_id); }) {}
-  ~Device() {
-    stop = true;
-    thread.join();
-  }
-};
+using Device = geojcbb::test::PtyDevice;
 
 template <class M>
 std::vector<std::uint8_t> bytes_of(const M& m) {

@@ -18,6 +18,10 @@
 namespace geojcbb::host {
 
 /// CONFIG for a sensor and the evaluation's options (the same settings SlamSession derives).
+/// Strategies by name (case-insensitive), in the tables' order; no names: all six. Throws
+/// std::invalid_argument naming an unknown one.
+std::vector<Strategy> select_strategies(const std::vector<std::string>& names);
+
 proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o);
 proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o);
 /// RESET at x0 with P0, each diagonal element at least 1e-6 (the float filter's floor).
