@@ -162,6 +162,7 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   ss.params.local_radius_m = sensor.max_range_m + opt.compensation_m;
   ss.params.groups = opt.groups;
   ss.params.condition_groups = opt.condition_groups;
+  ss.params.node_budget = opt.node_budget;
   ss.new_landmark_level = opt.new_landmark_gate;
   ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;

@@ -37,6 +37,7 @@ struct RunOptions {
   double compensation_m = 5.0;       ///< d in r + d (eq. 5); r is the scenario's max range
   int groups = 3;                    ///< K for k-means / GMM-EM
   bool condition_groups = false;
+  int node_budget = 0;  ///< JCBB nodes per scan (0: the capacity's MaxJcbbNodes)
   int max_steps = 0;                    ///< stop after this many control intervals (0: the whole path)
   ekf::LandmarkPolicy landmark_policy;  ///< tentative landmarks (confirm / remove)
   double view_margin_m = 1.0;           ///< a landmark within this of the range limits is not expected
