@@ -26,6 +26,15 @@ int ms_left(Clock::time_point deadline) {
 }  // namespace
 
 QemuMachine::QemuMachine(const QemuOptions& o) {
+  try {
+    start(o);
+  } catch (...) {
+    cleanup();  // the destructor does not run for a constructor that throws: QEMU (halted) would stay
+    throw;
+  }
+}
+
+void QemuMachine::start(const QemuOptions& o) {
   char dir[] = "/tmp/geojcbb-qemu-XXXXXX";
   if (mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp failed");
   socket_path_ = std::string(dir) + "/qmp.sock";
@@ -77,15 +86,22 @@ QemuMachine::QemuMachine(const QemuOptions& o) {
   if (pty_.empty()) throw std::runtime_error("QMP query-chardev lists no pty for serial0: " + chardevs.dump());
 }
 
-QemuMachine::~QemuMachine() {
+QemuMachine::~QemuMachine() { cleanup(); }
+
+void QemuMachine::cleanup() {
   if (qmp_fd_ >= 0) close(qmp_fd_);
+  qmp_fd_ = -1;
   if (pid_ > 0 && !exited_) {
     kill(pid_, SIGKILL);
     waitpid(pid_, nullptr, 0);
+    exited_ = true;
   }
-  unlink(socket_path_.c_str());
-  const std::size_t slash = socket_path_.rfind('/');
-  if (slash != std::string::npos) rmdir(socket_path_.substr(0, slash).c_str());
+  if (!socket_path_.empty()) {
+    unlink(socket_path_.c_str());
+    const std::size_t slash = socket_path_.rfind('/');
+    if (slash != std::string::npos) rmdir(socket_path_.substr(0, slash).c_str());
+    socket_path_.clear();
+  }
 }
 
 std::string QemuMachine::read_line(int timeout_ms) {

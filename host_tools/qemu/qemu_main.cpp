@@ -177,6 +177,7 @@ int main(int argc, char** argv) {
                large = matches<LargeControllerBounds>(caps);
     if (check && !small && !dflt && !large) throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
     std::vector<Strategy> strategies = select_strategies(names);
+    if (worst > 0 && check) throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
     if (worst > 0) {
       worst_case(port, caps, strategies, worst, timeout_ms);
       strategies.clear();

@@ -409,3 +409,29 @@ TEST_CASE("node: retransmitted stream frames are not applied twice, and the last
   CHECK(replies(h.out).size() == n + 2);
   CHECK(h.node->stats().scans == 7);
 }
+
+TEST_CASE("node: stream frames stay fresh across the 16-bit seq wrap and long runs of control frames") {
+  // Seq starts just below the wrap; between scans the host sends 40,000 PINGs (more than half the
+  // seq space), as an idle host polling would. Every scan must still be applied and answered, and a
+  // retransmission of the last batch must still be recognised.
+  Harness h;
+  h.seq = 0xFFF0;
+  h.open(0);
+  for (int k = 0; k < 4; ++k) {
+    const std::size_t n = replies(h.out).size();
+    h.send(test_odometry());
+    const std::vector<std::uint8_t> batch = h.frame(test_batch(k), h.seq++);
+    h.send_bytes(batch);
+    REQUIRE(replies(h.out).size() == n + 2);  // ASSOC_RESULT, POSE
+    CHECK(h.node->stats().scans == static_cast<std::uint32_t>(k + 1));
+    h.send_bytes(batch);  // a retransmission right away: answered from the stored reply, not applied
+    CHECK(replies(h.out).size() == n + 4);
+    CHECK(h.node->stats().scans == static_cast<std::uint32_t>(k + 1));
+    proto::Ping p;
+    for (int i = 0; i < 40000; ++i) h.send(p);
+  }
+  // Only the PONGs besides: no ERROR, nothing dropped.
+  std::size_t errors = 0;
+  for (const Reply& r : replies(h.out)) errors += r.type == static_cast<std::uint8_t>(proto::MsgType::kError);
+  CHECK(errors == 0);
+}

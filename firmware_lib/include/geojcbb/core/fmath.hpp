@@ -5,15 +5,17 @@
 // equal, bit for bit, to the host's float pipeline (docs/design.md, "Same bits on host and
 // device"), so float goes through the functions below: plain float additions and multiplications
 // in a fixed order, which IEEE-754 rounds identically everywhere as long as the compiler neither
-// contracts a*b+c into a fused multiply-add (-ffp-contract=off, set by the toolchain file) nor
+// contracts a*b+c into a fused multiply-add (-ffp-contract=off, which geojcbb::firmware's CMake
+// target gives every user) nor
 // reorders (no -ffast-math). sqrt and remainder are exactly rounded by IEEE-754 and stay std::.
 // double (the host's evaluation Scalar) keeps the C library.
 //
 // Method: Cody-Waite argument reduction and minimax polynomials with Cephes' published
 // coefficients (S. L. Moshier, "Methods and Programs for Mathematical Functions", 1989). Accuracy
-// against a double reference (tests/firmware_lib/core/test_fmath.cpp): sin and cos within 1.5 ulp
-// on [-2 pi, 2 pi] and 1e-7 absolute up to 4096 rad; atan2 within 3.2 ulp; exp within 1 ulp; log
-// within 0.75 ulp. Bounds: no loops.
+// against a double reference, in ulp of the result's binade (tests/firmware_lib/core/
+// test_fmath.cpp): sin and cos within 1.6 ulp on [-2 pi, 2 pi] and next to every zero below 4096
+// rad; atan2 within 3.2 ulp; exp within 1 ulp; log within 0.85 ulp (every float in [0.5, 2)).
+// Bounds: no loops.
 #pragma once
 
 #include <cmath>
@@ -36,12 +38,15 @@ inline std::uint32_t to_bits(float f) {
   return u;
 }
 
-// pi/2 in three parts whose products with a quadrant index up to 2^12 are exact in float.
+// pi/2 in four parts of at most 11 significant bits (the last one rounded): for a quadrant index
+// below 2^12 every product with the first three is exact, so the reduced argument is accurate to
+// float even next to a zero of sin or cos (pi/2 - the four parts: 8e-20).
 constexpr float kPio2Hi = 1.5703125f;
 constexpr float kPio2Mid = 4.837512969970703125e-4f;
-constexpr float kPio2Lo = 7.54978995489188216e-8f;
+constexpr float kPio2Lo1 = 7.549533620476722717e-8f;
+constexpr float kPio2Lo2 = 2.5633440682570896e-12f;
 constexpr float kTwoOverPi = 0.636619772367581343f;
-// Up to this |x| the three-part reduction is accurate to float; beyond it x is first wrapped with
+// Up to this |x| (quadrant index < 2^12) the reduction is accurate to float; beyond it x is first wrapped with
 // std::remainder by float(2 pi) (exact, hence portable; the angle error grows as |x| * 1.7e-7).
 // Angles in this library are wrapped to a few pi, so that path is for robustness only.
 constexpr float kMaxReduced = 4096.0f;
@@ -62,7 +67,7 @@ inline int reduce(float x, float& r) {
   const float k = x * kTwoOverPi;
   const int q = static_cast<int>(k >= 0.0f ? k + 0.5f : k - 0.5f);
   const float fq = static_cast<float>(q);
-  r = ((x - fq * kPio2Hi) - fq * kPio2Mid) - fq * kPio2Lo;
+  r = (((x - fq * kPio2Hi) - fq * kPio2Mid) - fq * kPio2Lo1) - fq * kPio2Lo2;
   return q & 3;
 }
 
@@ -71,6 +76,7 @@ inline int reduce(float x, float& r) {
 /// sin(x); NaN for NaN and infinities.
 inline float sin(float x) {
   if (!std::isfinite(x)) return x - x;
+  if (x == 0.0f) return x;  // keeps the sign of zero
   if (!(std::fabs(x) <= detail::kMaxReduced)) x = std::remainder(x, detail::kTwoPiF);
   float r;
   switch (detail::reduce(x, r)) {

@@ -156,6 +156,7 @@ class Node {
   void handle(const proto::FrameView& f) {
     rx_type_ = f.type;
     rx_seq_ = f.seq;
+    follow_seq();
     proto::Error e = proto::Error::kOk;
     switch (static_cast<proto::MsgType>(f.type)) {
       case proto::MsgType::kHello: e = serve<proto::Hello>(f); break;
@@ -314,6 +315,17 @@ class Node {
   void applied() {
     last_stream_seq_ = rx_seq_;
     have_stream_seq_ = true;
+  }
+  // Control frames (PING, STATS_REQUEST, ...) advance the host's seq too. Without this, 32,768 of
+  // them between two stream frames would make every later stream frame look old (serial arithmetic
+  // wraps) and the device would answer nothing. The reference follows any frame to at most
+  // kRetransmitWindow behind it: a retransmission is recognised if it is at most that old.
+  void follow_seq() {
+    if (!have_stream_seq_) return;
+    const std::uint16_t behind = static_cast<std::uint16_t>(rx_seq_ - last_stream_seq_);
+    if (static_cast<std::int16_t>(behind) > static_cast<std::int16_t>(proto::kRetransmitWindow)) {
+      last_stream_seq_ = static_cast<std::uint16_t>(rx_seq_ - proto::kRetransmitWindow);
+    }
   }
   bool ready() {
     if (hello_) return true;

@@ -45,6 +45,8 @@ class QemuMachine {
   const std::string& command() const { return command_; }
 
  private:
+  void start(const QemuOptions& o);
+  void cleanup();                             ///< kills QEMU if it runs, closes and removes the socket
   std::string qmp(const std::string& json);  ///< sends one command, returns its reply line
   std::string read_line(int timeout_ms);
   pid_t pid_ = -1;

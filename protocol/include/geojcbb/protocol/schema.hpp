@@ -27,7 +27,7 @@ inline constexpr char kSchemaText[] =
     "8=wrong_type 9=non_finite 10=out_of_range 11=capacity_exceeded 12=not_positive_definite "
     "13=buffer_too_small 14=schema_mismatch 15=not_ready 16=internal\n"
     "session before_HELLO=HELLO,PING acked=CONFIG,RESET,SHUTDOWN stream=ODOMETRY,OBS_BATCH "
-    "stream_applied_once_by_seq_since=CONFIG,RESET duplicate_last_OBS_BATCH=stored_reply "
+    "stream_applied_once_by_seq_since=CONFIG,RESET retransmit_window=4096 duplicate_last_OBS_BATCH=stored_reply "
     "periodic_STATS=after_POSE_every_stats_period_scans\n"
     "msg 0x01 HELLO protocol_version:u8 schema_hash:u32\n"
     "msg 0x02 CAPABILITIES protocol_version:u8 schema_hash:u32 max_observations:u16{>=1} "
@@ -59,6 +59,11 @@ inline constexpr char kSchemaText[] =
     "instr_associate:u32 instr_update:u32 instr_augment_review:u32 instr_step:u32 "
     "stack_high_water_bytes:u32\n"
     "msg 0x7F ERROR error:u8{2..16} offending_type:u8 offending_seq:u16\n";
+
+/// How old (in frame seq, 16-bit serial arithmetic) a stream frame may be and still be recognised
+/// as a retransmission: the device's reference seq follows every frame to at most this far behind
+/// (the "session" line's retransmit_window).
+inline constexpr std::uint16_t kRetransmitWindow = 4096;
 
 inline constexpr std::size_t kSchemaTextLength = sizeof(kSchemaText) - 1;  ///< without the NUL
 
