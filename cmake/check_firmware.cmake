@@ -14,8 +14,8 @@
 #                 ISR       regex of the interrupt handlers: the deepest handler chain plus
 #                           EXCEPTION_FRAME bytes (the hardware-stacked frame) is added on top, as
 #                           an interrupt can arrive at the deepest point (handlers do not nest).
-#   MODE=qemu     QEMU, ELF, INPUT, WORK_DIR, TIMEOUT [, MAX_STACK]: runs the firmware under QEMU
-#                 (mps2-an386, -icount shift=0) with the session INPUT (hex bytes, and a line
+#   MODE=qemu     QEMU, ELF, INPUT, WORK_DIR, TIMEOUT [, MAX_STACK, MACHINE]: runs the firmware under
+#                 QEMU (MACHINE, default mps2-an386; -icount shift=0) with the session INPUT (hex bytes, and a line
 #                 "# replies: tt tt ..." of the expected reply types) on its UART, no fixed sleeps:
 #                 it must exit with status 0 (semihosting, after SHUTDOWN) and answer with exactly
 #                 the expected frames (COBS, version, length checked). Prints the device's STATS;
@@ -265,7 +265,10 @@ elseif(MODE STREQUAL "qemu")
   endif()
   # QEMU reads the session from stdin (-serial stdio) as fast as the UART takes it, and exits when
   # the firmware makes the semihosting exit call after SHUTDOWN. TIMEOUT is a safety net only.
-  set(cmd ${QEMU} -M mps2-an386 -nodefaults -display none -nic none
+  if(NOT DEFINED MACHINE)
+    set(MACHINE mps2-an386)
+  endif()
+  set(cmd ${QEMU} -M ${MACHINE} -nodefaults -display none -nic none
       -semihosting-config enable=on,target=native -icount shift=0 -serial stdio -kernel ${ELF})
   string(REPLACE ";" " " shown "${cmd}")
   message(STATUS "${shown} < session.bin > uart.bin")

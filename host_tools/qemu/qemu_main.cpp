@@ -78,9 +78,10 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
 // individually compatible with every landmark: the most expensive gating and grouping, and the
 // widest JCBB tree (which its bound still prunes: no such scan reached the node budget).
 void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Strategy>& strategies,
-                int scans, int timeout_ms) {
+                int scans, int timeout_ms, int node_budget) {
+  const std::uint32_t budget = node_budget > 0 ? static_cast<std::uint32_t>(node_budget) : caps.max_jcbb_nodes;
   std::printf("worst case: %u observations, each compatible with each of %u landmarks; node budget %u\n",
-              caps.max_observations, caps.max_observations, caps.max_jcbb_nodes);
+              caps.max_observations, caps.max_observations, budget);
   std::printf("  %-8s %6s %12s %14s %14s %14s\n", "strategy", "scans", "budget hits", "assoc median", "assoc max",
               "step max");
   const std::size_t m = std::min<std::size_t>(caps.max_observations, kLinkMaxObs);
@@ -91,7 +92,7 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
     c.strategy = static_cast<proto::StrategyCode>(s);
     c.local_radius_m = 40.0f;
     c.max_range_m = 30.0f;
-    c.node_budget = caps.max_jcbb_nodes;
+    c.node_budget = budget;
     c.confirm_hits = 1;
     c.max_misses = 255;
     c.max_tentative_reviews = 255;
@@ -141,6 +142,8 @@ int main(int argc, char** argv) {
   RunOptions o;
   app.add_option("--elf", q.elf, "firmware image")->default_val(q.elf);
   app.add_option("--qemu", q.qemu, "QEMU program")->default_val(q.qemu);
+  app.add_option("--machine", q.machine, "QEMU machine: mps2-an386 or netduinoplus2 (the ELF must be built for it)")
+      ->default_val(q.machine);
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
   app.add_option("--strategies", names, "strategies, comma separated (default: all six)")->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
@@ -179,7 +182,7 @@ int main(int argc, char** argv) {
     std::vector<Strategy> strategies = select_strategies(names);
     if (worst > 0 && check) throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
     if (worst > 0) {
-      worst_case(port, caps, strategies, worst, timeout_ms);
+      worst_case(port, caps, strategies, worst, timeout_ms, o.node_budget);
       strategies.clear();
     }
     if (!strategies.empty()) std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),

@@ -2,7 +2,7 @@
 //   DATA +0x0, STATE +0x4 (TXFULL, RXFULL, TXOVERRUN, RXOVERRUN), CTRL +0x8 (TX_EN, RX_EN, TX_INTEN,
 //   RX_INTEN, ...), INTSTATUS/INTCLEAR +0xC (write 1 to clear), BAUDDIV +0x10 (>= 16).
 // The UART holds one received byte. Receive is interrupt-driven (NVIC IRQ 0): the handler moves the
-// byte into a ring the main loop drains. When the ring is full the handler masks IRQ 0 at the NVIC
+// byte into port/common's ring (uart_ring.hpp), which the main loop drains. When the ring is full the handler masks IRQ 0 at the NVIC
 // and leaves the byte in DATA; the line stays high, so the interrupt is taken again as soon as the
 // main loop frees space and unmasks it. Under QEMU nothing is lost (the model accepts no further
 // input while RXFULL is set); on hardware further bytes would overrun the UART, which is counted.
@@ -12,9 +12,12 @@
 #include <cstdint>
 
 #include "board.hpp"
+#include "uart_ring.hpp"
 
-namespace geojcbb::mps2 {
+namespace geojcbb::port {
 namespace {
+
+using mps2::kIrqUart0Rx;
 
 constexpr std::uintptr_t kBase = 0x40004000;
 constexpr std::uintptr_t kData = kBase + 0x0;
@@ -32,18 +35,7 @@ constexpr std::uint32_t kCtrlRxEn = 1u << 1;
 constexpr std::uint32_t kCtrlRxIntEn = 1u << 3;
 constexpr std::uint32_t kIntRx = 1u << 1;
 
-static_assert((uart::kRxRingSize & (uart::kRxRingSize - 1)) == 0, "ring size: a power of two");
-constexpr std::uint32_t kMask = uart::kRxRingSize - 1;
-
-// Single producer (the RX interrupt: head), single consumer (thread mode: tail). Free-running
-// indices; head - tail is the fill level.
-std::uint8_t g_ring[uart::kRxRingSize];
-volatile std::uint32_t g_head = 0;
-volatile std::uint32_t g_tail = 0;
-volatile bool g_paused = false;  // IRQ 0 masked because the ring was full
-volatile uart::Counters g_counters;
-
-inline void barrier() { __asm volatile("" ::: "memory"); }
+using ring::g_counters;
 
 }  // namespace
 
@@ -55,8 +47,7 @@ void init(std::uint32_t baud) {
   reg(kBaudDiv) = baud == 0 || kSysClkHz / baud < 16 ? 16 : kSysClkHz / baud;  // the divider's minimum is 16
   reg(kIntClear) = 0xF;
   reg(kState) = kStateRxOverrun | kStateTxOverrun;  // write 1 to clear
-  g_head = g_tail = 0;
-  g_paused = false;
+  ring::reset();
   reg(scs::kNvicIcpr0) = 1u << kIrqUart0Rx;  // the UART is off: nothing can pend it again yet
   reg(scs::kNvicIser0) = 1u << kIrqUart0Rx;
   // QEMU quirk: enabling RX does not tell the character backend that the UART can take input; a
@@ -70,32 +61,6 @@ void init(std::uint32_t baud) {
   const std::uint32_t stale = reg(kData);
   static_cast<void>(stale);
   __asm volatile("cpsie i" ::: "memory");
-}
-
-std::size_t rx_peek(const std::uint8_t** data) {
-  const std::uint32_t tail = g_tail;
-  const std::uint32_t used = g_head - tail;
-  barrier();  // the bytes below head were written before head
-  const std::uint32_t start = tail & kMask;
-  const std::uint32_t contiguous = kRxRingSize - start;
-  *data = &g_ring[start];
-  return used < contiguous ? used : contiguous;
-}
-
-void rx_release(std::size_t n) {
-  barrier();  // the caller is done with the bytes before they are handed back
-  g_tail = g_tail + static_cast<std::uint32_t>(n);
-  if (g_paused) {  // the handler masked itself: it cannot run until unmasked here
-    g_paused = false;
-    reg(scs::kNvicIser0) = 1u << kIrqUart0Rx;
-    reg(scs::kNvicIspr0) = 1u << kIrqUart0Rx;  // run it once even if its request was cleared
-  }
-}
-
-void wait_for_rx() {
-  __asm volatile("cpsid i" ::: "memory");
-  if (g_head == g_tail) __asm volatile("dsb\n\twfi" ::: "memory");  // a pending interrupt wakes it
-  __asm volatile("cpsie i\n\tisb" ::: "memory");                    // the interrupt is taken here
 }
 
 void write(const std::uint8_t* data, std::size_t n) {
@@ -116,20 +81,9 @@ void flush() {
   }  // <= kTxSpinLimit
 }
 
-Counters counters() {
-  Counters c;
-  c.rx_bytes = g_counters.rx_bytes;
-  c.rx_stalls = g_counters.rx_stalls;
-  c.rx_overruns = g_counters.rx_overruns;
-  c.rx_spurious = g_counters.rx_spurious;
-  c.tx_bytes = g_counters.tx_bytes;
-  c.tx_dropped = g_counters.tx_dropped;
-  return c;
-}
-
 }  // namespace uart
 
-extern "C" void geojcbb_uart0_rx_irq() {
+extern "C" void geojcbb_uart0_rx_irq() {  // declared in board.hpp (geojcbb::mps2)
   std::uint32_t state = reg(kState);
   if ((state & kStateRxOverrun) != 0) {
     g_counters.rx_overruns = g_counters.rx_overruns + 1;
@@ -143,21 +97,11 @@ extern "C" void geojcbb_uart0_rx_irq() {
       return;
     }
   }
-  const std::uint32_t head = g_head;
-  if (head - g_tail == uart::kRxRingSize) {  // full: pause; the byte waits in DATA, and rx_release
-    g_paused = true;                         // runs this handler again
-    g_counters.rx_stalls = g_counters.rx_stalls + 1;
-    reg(scs::kNvicIcer0) = 1u << kIrqUart0Rx;
-    __asm volatile("dsb\n\tisb" ::: "memory");
-    return;
-  }
+  if (ring::pause_if_full()) return;  // full: the byte waits in DATA, and rx_release runs this again
   // Clear the request before reading DATA: the model takes no byte while RXFULL is set, and a byte
   // that arrives once DATA has been read raises the request again.
   reg(kIntClear) = kIntRx;
-  g_ring[head & kMask] = static_cast<std::uint8_t>(reg(kData));
-  barrier();
-  g_head = head + 1;
-  g_counters.rx_bytes = g_counters.rx_bytes + 1;
+  ring::push(static_cast<std::uint8_t>(reg(kData)));
 }
 
-}  // namespace geojcbb::mps2
+}  // namespace geojcbb::port

@@ -1,5 +1,6 @@
-// mps2_an386: the firmware. The device loop (node::Node, float) on UART0 of QEMU's mps2-an386.
-//   GEOJCBB_BOARD_BOUNDS  the configuration's Bounds type (CMakeLists.txt: small, default, large)
+// port/common: the firmware, shared by the boards. The device loop (node::Node, float) on the board's
+// UART (mps2-an386: UART0; netduinoplus2: USART1).
+//   GEOJCBB_BOARD_BOUNDS  the configuration's Bounds type (the board's CMakeLists.txt)
 // All pipeline memory is the one static Node, sized by the bounds (.bss). The loop drains the
 // receive ring into Node::on_bytes and sleeps (WFI) when it is empty; after each chunk that ends a
 // frame it measures the stack's high-water mark and hands it to the Node (STATS reports it). A
@@ -10,7 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "board.hpp"
+#include "port.hpp"
 #include "geojcbb/node/node.hpp"
 
 #ifndef GEOJCBB_BOARD_BOUNDS
@@ -19,7 +20,7 @@
 
 namespace {
 
-namespace board = geojcbb::mps2;
+namespace board = geojcbb::port;
 using BoardBounds = GEOJCBB_BOARD_BOUNDS;
 using BoardNode = geojcbb::node::Node<float, BoardBounds>;
 

@@ -1,20 +1,24 @@
-// mps2_an386: SysTick calibration. Under `-icount shift=0`, systick::instr_now() must count the
-// instructions of a loop of known length: 2 * kIterations (subs, bne) plus the few instructions of
-// instr_now itself. Writes the measured count to UART0 (4 bytes, little-endian) and exits with 0 when
-// it is within kTolerance of the expectation, 1 when below, 2 when above.
+// port/common: SysTick calibration, built for each board. Under `-icount shift=0`, systick::instr_now()
+// must count the instructions of a loop of known length: 2 * kIterations (subs, bne) plus the few
+// instructions of instr_now itself. Writes the measured count to the board's UART (4 bytes,
+// little-endian) and exits with 0 when it is within kTolerance of the expectation, 1 when below, 2
+// when above.
 #include <cstdint>
 
-#include "board.hpp"
+#include "port.hpp"
 
 namespace {
 constexpr std::uint32_t kIterations = 1'000'000;
 constexpr std::uint32_t kExpected = 2 * kIterations;
-// Two readings each quantised to one tick, plus instr_now's own instructions (about 20).
-constexpr std::uint32_t kTolerance = 3 * geojcbb::mps2::systick::kInstructionsPerTick + 40;
+// Two readings each quantised to one tick, plus instr_now's own instructions (about 20; with a
+// fractional tick also the first reading's 64-bit conversion, a libgcc division, runs inside the
+// measured interval: up to 200 more).
+constexpr std::uint32_t kTolerance =
+    3 * geojcbb::port::systick::kInstructionsPerTick + 40 + (geojcbb::port::systick::kInstrPerTickDen == 1 ? 0 : 200);
 }  // namespace
 
 int main() {
-  namespace board = geojcbb::mps2;
+  namespace board = geojcbb::port;
   board::systick::start();
   board::uart::init(115200);
   std::uint32_t n = kIterations;

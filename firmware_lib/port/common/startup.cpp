@@ -1,17 +1,19 @@
-// mps2_an386: startup. The vector table, the reset handler and the fault handlers.
-// Reset sequence (docs/firmware.md):
+// port/common: startup, shared by the boards. The reset handler, the fault handlers, semihosting
+// exit and the stack (paint, MPU guard, high-water mark); each board supplies its vector table
+// (vectors.hpp) and board_early_init(). Reset sequence (docs/firmware.md):
 //   1. (asm, before any compiled code) enable the FPU: CPACR CP10/CP11 full access, DSB, ISB;
 //   2. (asm) paint the whole stack region with stack::kPaint (nothing is on the stack yet);
-//   3. copy .data from FLASH, zero .bss, install the MPU stack guard;
-//   4. run the static constructors (.preinit_array, .init_array);
-//   5. main(); if it returns, exit through semihosting with exit_status::kMainReturned.
+//   3. board_early_init() (touches neither .data nor .bss);
+//   4. copy .data from FLASH, zero .bss, install the MPU stack guard;
+//   5. run the static constructors (.preinit_array, .init_array);
+//   6. main(); if it returns, exit through semihosting with exit_status::kMainReturned.
 // Faults (HardFault, NMI, any interrupt without a handler) exit QEMU with a failure status.
 #include <cstdint>
 
-#include "board.hpp"
+#include "port.hpp"
 
 extern "C" {
-// Linker script symbols (mps2_an386.ld).
+// Linker script symbols (cortex_m4f.ld).
 extern std::uint32_t __data_start[], __data_end[], __data_load[];
 extern std::uint32_t __bss_start[], __bss_end[];
 extern std::uint32_t __stack_limit[], __stack_top[];
@@ -27,7 +29,7 @@ void geojcbb_hard_fault();
 void geojcbb_unexpected_irq();
 }
 
-namespace geojcbb::mps2 {
+namespace geojcbb::port {
 
 namespace semihost {
 
@@ -80,12 +82,12 @@ std::uint32_t high_water() {
 }
 
 }  // namespace stack
-}  // namespace geojcbb::mps2
+}  // namespace geojcbb::port
 
-using geojcbb::mps2::exit_status::kHardFault;
-using geojcbb::mps2::exit_status::kMainReturned;
-using geojcbb::mps2::exit_status::kNmi;
-using geojcbb::mps2::exit_status::kUnexpectedIrq;
+using geojcbb::port::exit_status::kHardFault;
+using geojcbb::port::exit_status::kMainReturned;
+using geojcbb::port::exit_status::kNmi;
+using geojcbb::port::exit_status::kUnexpectedIrq;
 
 // The reset handler proper: FPU on and stack painted in assembly, so no compiled instruction (which
 // may be a floating-point one, or may push to the stack) runs before them.
@@ -109,52 +111,23 @@ extern "C" __attribute__((naked, noreturn)) void Reset_Handler() {
       "b geojcbb_reset_continue\n\t"
       ".ltorg");
 }
-static_assert(geojcbb::mps2::stack::kPaint == 0x57AC57ACu, "the reset handler paints with this word");
+static_assert(geojcbb::port::stack::kPaint == 0x57AC57ACu, "the reset handler paints with this word");
 
 extern "C" [[noreturn]] void geojcbb_reset_continue() {
   // Copy .data, zero .bss: word loops through volatile pointers, so the compiler does not turn them
   // into memcpy/memset calls (picolibc's are fine, but this is before the C runtime is set up).
   volatile std::uint32_t* dst = __data_start;
   const volatile std::uint32_t* src = __data_load;
+  geojcbb::port::board_early_init();
   while (dst < __data_end) *dst++ = *src++;                                  // <= sizeof(.data) / 4
   for (volatile std::uint32_t* p = __bss_start; p < __bss_end; ++p) *p = 0;  // <= sizeof(.bss) / 4
-  geojcbb::mps2::stack::install_guard();
+  geojcbb::port::stack::install_guard();
   for (InitFn* f = __preinit_array_start; f < __preinit_array_end; ++f) (*f)();  // <= array length
   for (InitFn* f = __init_array_start; f < __init_array_end; ++f) (*f)();        // <= array length
   main();
-  geojcbb::mps2::semihost::exit(kMainReturned);
+  geojcbb::port::semihost::exit(kMainReturned);
 }
 
-extern "C" void geojcbb_nmi() { geojcbb::mps2::semihost::exit(kNmi); }
-extern "C" void geojcbb_hard_fault() { geojcbb::mps2::semihost::exit(kHardFault); }
-extern "C" void geojcbb_unexpected_irq() { geojcbb::mps2::semihost::exit(kUnexpectedIrq); }
-
-namespace {
-
-using Vector = void (*)();
-constexpr std::size_t kSystemVectors = 16;
-constexpr std::size_t kVectors = kSystemVectors + geojcbb::mps2::kExternalIrqs;
-
-// The table as an array of entries: entry 0 is the initial stack pointer, the others handlers.
-struct VectorTable {
-  const void* initial_sp;
-  Vector handler[kVectors - 1];
-};
-
-constexpr VectorTable make_table() {
-  VectorTable t{__stack_top, {}};
-  for (std::size_t i = 0; i < kVectors - 1; ++i) t.handler[i] = geojcbb_unexpected_irq;  // kVectors
-  t.handler[1 - 1] = Reset_Handler;
-  t.handler[2 - 1] = geojcbb_nmi;
-  t.handler[3 - 1] = geojcbb_hard_fault;  // MemManage, BusFault, UsageFault are not enabled: they
-                                          // escalate to HardFault
-  t.handler[15 - 1] = geojcbb::mps2::geojcbb_systick_irq;
-  t.handler[kSystemVectors + geojcbb::mps2::kIrqUart0Rx - 1] = geojcbb::mps2::geojcbb_uart0_rx_irq;
-  return t;
-}
-
-// In FLASH at address 0 (.vectors is the first output section), built at compile time (constexpr:
-// no constructor runs for it). `used` keeps the compiler from dropping it; the linker KEEPs it.
-__attribute__((section(".vectors"), used)) constexpr VectorTable g_vector_table = make_table();
-
-}  // namespace
+extern "C" void geojcbb_nmi() { geojcbb::port::semihost::exit(kNmi); }
+extern "C" void geojcbb_hard_fault() { geojcbb::port::semihost::exit(kHardFault); }
+extern "C" void geojcbb_unexpected_irq() { geojcbb::port::semihost::exit(kUnexpectedIrq); }
