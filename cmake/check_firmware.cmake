@@ -19,7 +19,10 @@
 #                 "# replies: tt tt ..." of the expected reply types) on its UART, no fixed sleeps:
 #                 it must exit with status 0 (semihosting, after SHUTDOWN) and answer with exactly
 #                 the expected frames (COBS, version, length checked). Prints the device's STATS;
-#                 fails when its stack high-water mark exceeds MAX_STACK bytes.
+#                 fails when its stack high-water mark exceeds MAX_STACK bytes. LEAD_DELIMITERS=N
+#                 (optional) sends N delimiters (0x00, empty frames: the node ignores them) before the
+#                 session, a margin for a board whose UART model drops what arrives before the
+#                 firmware enables it (netduinoplus2: QEMU reads stdin from the start).
 # Sets `var` to the files under `dir` with extension `ext`; fails when there are none.
 macro(glob_or_fail var dir ext)
   file(GLOB_RECURSE ${var} ${dir}/*.${ext})
@@ -263,6 +266,21 @@ elseif(MODE STREQUAL "qemu")
   if(NOT rc EQUAL 0 OR NOT written EQUAL count)
     message(FATAL_ERROR "could not write the session (${written} of ${count} bytes)")
   endif()
+  set(input ${WORK_DIR}/session.bin)
+  if(LEAD_DELIMITERS GREATER 0)
+    find_program(HEAD head REQUIRED)
+    find_program(CAT cat REQUIRED)
+    execute_process(COMMAND ${HEAD} -c ${LEAD_DELIMITERS} /dev/zero OUTPUT_FILE ${WORK_DIR}/lead.bin RESULT_VARIABLE rc)
+    execute_process(COMMAND ${CAT} ${WORK_DIR}/lead.bin ${WORK_DIR}/session.bin OUTPUT_FILE ${WORK_DIR}/input.bin
+                    RESULT_VARIABLE rc2)
+    file(SIZE ${WORK_DIR}/input.bin written)
+    math(EXPR want "${LEAD_DELIMITERS} + ${count}")
+    if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0 OR NOT written EQUAL want)
+      message(FATAL_ERROR "could not write the padded session (${written} of ${want} bytes)")
+    endif()
+    set(input ${WORK_DIR}/input.bin)
+    math(EXPR count "${want}")
+  endif()
   # QEMU reads the session from stdin (-serial stdio) as fast as the UART takes it, and exits when
   # the firmware makes the semihosting exit call after SHUTDOWN. TIMEOUT is a safety net only.
   if(NOT DEFINED MACHINE)
@@ -271,9 +289,10 @@ elseif(MODE STREQUAL "qemu")
   set(cmd ${QEMU} -M ${MACHINE} -nodefaults -display none -nic none
       -semihosting-config enable=on,target=native -icount shift=0 -serial stdio -kernel ${ELF})
   string(REPLACE ";" " " shown "${cmd}")
-  message(STATUS "${shown} < session.bin > uart.bin")
+  get_filename_component(input_name ${input} NAME)
+  message(STATUS "${shown} < ${input_name} > uart.bin")
   string(TIMESTAMP t0 "%s")
-  execute_process(COMMAND ${cmd} INPUT_FILE ${WORK_DIR}/session.bin OUTPUT_FILE ${WORK_DIR}/uart.bin
+  execute_process(COMMAND ${cmd} INPUT_FILE ${input} OUTPUT_FILE ${WORK_DIR}/uart.bin
                   ERROR_VARIABLE err RESULT_VARIABLE rc TIMEOUT ${TIMEOUT})
   string(TIMESTAMP t1 "%s")
   math(EXPR secs "${t1} - ${t0}")

@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "port.hpp"
 #include "geojcbb/node/node.hpp"
+#include "port.hpp"
 
 #ifndef GEOJCBB_BOARD_BOUNDS
 #error "GEOJCBB_BOARD_BOUNDS: the configuration's geojcbb::Bounds type"

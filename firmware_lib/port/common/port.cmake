@@ -50,14 +50,18 @@ set(GEOJCBB_QEMU_HARNESS ${PROJECT_SOURCE_DIR}/build/host-release/host_tools/geo
     "geojcbb_qemu, the host side of the end-to-end QEMU tests")
 
 # geojcbb_port_firmware_tests(PREFIX name ELF target BOARD lib MACHINE qemu-machine ISR regex STACK bytes
-#                             SESSION hexfile)
+#                             SESSION hexfile [LEAD_DELIMITERS n])
 # The checks of one firmware ELF (CTest, cortex-m4f preset): PREFIX.no_heap (no allocator, exception,
 # RTTI or stdio symbols), .size (text/data/bss), .stack_frames (every frame <= 512 B, all static),
 # .stack_call_chain (the deepest chain from main - the loop, Node::on_bytes, the indirect calls
 # through the board's Output and clock - plus an interrupt on top, <= 2 KiB) and .qemu_smoke (a QEMU
-# run of SESSION on the board's UART: it must exit with status 0 and answer every frame).
+# run of SESSION on the board's UART, after LEAD_DELIMITERS empty frames: it must exit with status 0
+# and answer every frame).
 function(geojcbb_port_firmware_tests)
-  cmake_parse_arguments(T "" "PREFIX;ELF;BOARD;MACHINE;ISR;STACK;SESSION" "" ${ARGN})
+  cmake_parse_arguments(T "" "PREFIX;ELF;BOARD;MACHINE;ISR;STACK;SESSION;LEAD_DELIMITERS" "" ${ARGN})
+  if(NOT T_LEAD_DELIMITERS)
+    set(T_LEAD_DELIMITERS 0)
+  endif()
   set(check ${PROJECT_SOURCE_DIR}/cmake/check_firmware.cmake)
   set(board_dir ${CMAKE_CURRENT_BINARY_DIR}/CMakeFiles/${T_BOARD}.dir)
   set(obj_dir ${CMAKE_CURRENT_BINARY_DIR}/CMakeFiles/${T_ELF}.dir)
@@ -74,5 +78,5 @@ function(geojcbb_port_firmware_tests)
   add_test(NAME ${T_PREFIX}.qemu_smoke
     COMMAND ${CMAKE_COMMAND} -DQEMU=${GEOJCBB_QEMU_ARM} -DMACHINE=${T_MACHINE} -DELF=$<TARGET_FILE:${T_ELF}>
             -DINPUT=${T_SESSION} -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/smoke_${T_ELF}
-            -DTIMEOUT=120 -DMAX_STACK=${T_STACK} -DMODE=qemu -P ${check})
+            -DTIMEOUT=120 -DMAX_STACK=${T_STACK} -DLEAD_DELIMITERS=${T_LEAD_DELIMITERS} -DMODE=qemu -P ${check})
 endfunction()

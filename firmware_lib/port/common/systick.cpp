@@ -50,7 +50,7 @@ std::uint32_t instr_now() {
     return ticks * kInstrPerTickNum;                        // modulo 2^32
   } else {
     const std::uint64_t ticks = (static_cast<std::uint64_t>(wraps) << 24) + in_period;  // < 2^56
-    return static_cast<std::uint32_t>(ticks * kInstrPerTickNum / kInstrPerTickDen);      // < 2^63 before /
+    return static_cast<std::uint32_t>(ticks * kInstrPerTickNum / kInstrPerTickDen);     // < 2^63 before /
   }
 }
 

@@ -33,7 +33,7 @@ void rx_release(std::size_t n) {
     ring::g_paused = false;
     reg(nvic::bank(scs::kNvicIser0, kUartRxIrq)) = nvic::bit(kUartRxIrq);
     reg(nvic::bank(scs::kNvicIspr0, kUartRxIrq)) = nvic::bit(kUartRxIrq);  // run it once even if its
-                                                                            // request was cleared
+                                                                           // request was cleared
   }
 }
 

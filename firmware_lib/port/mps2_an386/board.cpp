@@ -2,6 +2,7 @@
 // RX is external IRQ 0, vector 16) and the early-init hook (nothing to do: the CMSDK UART holds input
 // until it is enabled, see uart.cpp).
 #include "board.hpp"
+
 #include "vectors.hpp"
 
 namespace geojcbb::port {
@@ -15,4 +16,5 @@ void board_early_init() {}
 using BoardVectorTable = geojcbb::port::VectorTable<geojcbb::mps2::kExternalIrqs>;
 extern "C" const BoardVectorTable geojcbb_vector_table;
 __attribute__((section(".vectors"), used)) constexpr BoardVectorTable geojcbb_vector_table =
-    geojcbb::port::make_vector_table<geojcbb::mps2::kExternalIrqs>(geojcbb::mps2::kIrqUart0Rx, geojcbb::mps2::geojcbb_uart0_rx_irq);
+    geojcbb::port::make_vector_table<geojcbb::mps2::kExternalIrqs>(geojcbb::mps2::kIrqUart0Rx,
+                                                                   geojcbb::mps2::geojcbb_uart0_rx_irq);

@@ -2,12 +2,11 @@
 //   DATA +0x0, STATE +0x4 (TXFULL, RXFULL, TXOVERRUN, RXOVERRUN), CTRL +0x8 (TX_EN, RX_EN, TX_INTEN,
 //   RX_INTEN, ...), INTSTATUS/INTCLEAR +0xC (write 1 to clear), BAUDDIV +0x10 (>= 16).
 // The UART holds one received byte. Receive is interrupt-driven (NVIC IRQ 0): the handler moves the
-// byte into port/common's ring (uart_ring.hpp), which the main loop drains. When the ring is full the handler masks IRQ 0 at the NVIC
-// and leaves the byte in DATA; the line stays high, so the interrupt is taken again as soon as the
-// main loop frees space and unmasks it. Under QEMU nothing is lost (the model accepts no further
-// input while RXFULL is set); on hardware further bytes would overrun the UART, which is counted.
-// Transmit polls STATE.TXFULL: a message is at most ~1 KB, and QEMU's model sends a byte at once
-// unless the host side is not reading.
+// byte into port/common's ring (uart_ring.hpp), which the main loop drains. When the ring is full the handler masks IRQ
+// 0 at the NVIC and leaves the byte in DATA; the line stays high, so the interrupt is taken again as soon as the main
+// loop frees space and unmasks it. Under QEMU nothing is lost (the model accepts no further input while RXFULL is set);
+// on hardware further bytes would overrun the UART, which is counted. Transmit polls STATE.TXFULL: a message is at most
+// ~1 KB, and QEMU's model sends a byte at once unless the host side is not reading.
 #include <cstddef>
 #include <cstdint>
 

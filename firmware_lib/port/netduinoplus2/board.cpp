@@ -1,6 +1,7 @@
 // netduinoplus2: the vector table (16 system and 82 external entries, USART1 on external IRQ 37,
 // vector 53). The early-init hook is usart.cpp's.
 #include "board.hpp"
+
 #include "vectors.hpp"
 
 // The table (port/common/vectors.hpp), built at compile time (constexpr: no constructor runs for it),
@@ -10,4 +11,5 @@
 using BoardVectorTable = geojcbb::port::VectorTable<geojcbb::netduinoplus2::kExternalIrqs>;
 extern "C" const BoardVectorTable geojcbb_vector_table;
 __attribute__((section(".vectors"), used)) constexpr BoardVectorTable geojcbb_vector_table =
-    geojcbb::port::make_vector_table<geojcbb::netduinoplus2::kExternalIrqs>(geojcbb::netduinoplus2::kIrqUsart1, geojcbb::netduinoplus2::geojcbb_usart1_irq);
+    geojcbb::port::make_vector_table<geojcbb::netduinoplus2::kExternalIrqs>(geojcbb::netduinoplus2::kIrqUsart1,
+                                                                            geojcbb::netduinoplus2::geojcbb_usart1_irq);

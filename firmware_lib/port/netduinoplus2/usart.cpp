@@ -44,9 +44,7 @@ constexpr std::uint32_t kCr1Ue = 1u << 13;
 constexpr std::uint32_t kEarlyBaud = 115200;
 
 /// BRR for `baud` with 16x oversampling: PCLK2 / baud (mantissa and fraction in one), at least 16.
-constexpr std::uint32_t brr(std::uint32_t baud) {
-  return baud == 0 || kApb2Hz / baud < 16 ? 16 : kApb2Hz / baud;
-}
+constexpr std::uint32_t brr(std::uint32_t baud) { return baud == 0 || kApb2Hz / baud < 16 ? 16 : kApb2Hz / baud; }
 
 using ring::g_counters;
 
