@@ -51,8 +51,7 @@ int main(int argc, char** argv) {
     const std::vector<Strategy> strategies = select_strategies(names);
     std::printf("%s, seed %llu, streamed over the link, %d scan(s) in flight\n", sc.name.c_str(),
                 static_cast<unsigned long long>(seed), lc.window);
-    std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %12s\n", "strategy", "scans", "TP", "TN", "FP", "FN",
-                "precision", "recall", "F1", "|x err| m", "|y err| m", "scans/s");
+    print_score_header();
     StreamOptions so;
     so.window = lc.window;
     so.note = [](const std::string& n) { std::printf("  %s\n", n.c_str()); };
@@ -63,15 +62,9 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       const RunResult r = stream_run(dl.session(), src, ro, so);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %12.0f\n", to_string(s), r.scans,
-                  r.score.tp, r.score.tn, r.score.fp, r.score.fn, r.score.precision(), r.score.recall(), r.score.f1(),
-                  r.mean_abs_x_m, r.mean_abs_y_m, r.scans / secs);
+      print_score_row(s, r, r.scans / secs);
     }
-    const proto::Stats st = dl.session().stats();
-    std::printf("device STATS: frames ok %u, bad CRC %u, bad length %u, overrun %u, unknown type %u, invalid field %u, "
-                "scans %u, budget hits %u\n",
-                st.frames_ok, st.bad_crc, st.bad_length, st.overrun, st.unknown_type, st.invalid_field, st.scans,
-                st.budget_hits);
+    std::printf("device STATS: %s\n", describe_stats(dl.session().stats()).c_str());
     if (dl.session().reconnections() > 0) {
       std::printf("link: %d reconnection(s), %d run restart(s)\n", dl.session().reconnections(),
                   dl.session().restarts());

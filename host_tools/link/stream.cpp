@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <stdexcept>
 
@@ -24,6 +25,32 @@ std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
     if (take) out.push_back(s);
   }
   return out;
+}
+
+void print_score_header(const char* extra) {
+  std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %9s %s\n", "strategy", "scans", "TP", "TN", "FP", "FN",
+              "precision", "recall", "F1", "|x err| m", "|y err| m", "scans/s", extra);
+}
+
+void print_score_row(Strategy s, const RunResult& r, double scans_per_s, const std::string& extra) {
+  std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %9.0f %s\n", to_string(s), r.scans,
+              r.score.tp, r.score.tn, r.score.fp, r.score.fn, r.score.precision(), r.score.recall(), r.score.f1(),
+              r.mean_abs_x_m, r.mean_abs_y_m, scans_per_s, extra.c_str());
+  std::fflush(stdout);
+}
+
+std::string describe_stats(const proto::Stats& st) {
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "frames ok %u, bad CRC %u, bad length %u, overrun %u, unknown type %u, invalid field %u, scans %u, "
+                "budget hits %u",
+                st.frames_ok, st.bad_crc, st.bad_length, st.overrun, st.unknown_type, st.invalid_field, st.scans,
+                st.budget_hits);
+  std::string s = line;
+  if (st.stack_high_water_bytes > 0) {  // measured by boards that paint their stack (not the desktop device)
+    s += ", stack high-water " + std::to_string(st.stack_high_water_bytes) + " bytes";
+  }
+  return s;
 }
 
 proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o) {

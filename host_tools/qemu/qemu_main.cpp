@@ -5,15 +5,13 @@
 // node running in float in this process; with --budget each scan's instruction counts (STATS under
 // -icount) are collected and summarised. Ends with SHUTDOWN: the firmware exits QEMU through
 // semihosting with status 0.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
-
-
-#include <CLI/CLI.hpp>
 
 #include "geojcbb_host/mirror.hpp"
 #include "geojcbb_host/qemu.hpp"
@@ -37,7 +35,9 @@ std::uint32_t median(std::vector<std::uint32_t> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
 }
-std::uint32_t maximum(const std::vector<std::uint32_t>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+std::uint32_t maximum(const std::vector<std::uint32_t>& v) {
+  return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
+}
 
 template <class B>
 bool matches(const proto::Capabilities& c) {
@@ -48,10 +48,10 @@ bool matches(const proto::Capabilities& c) {
 
 // One strategy over the link, optionally mirrored by the in-process node with bounds B.
 template <class B>
-RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
-                  bool check, bool budget, int timeout_ms, MirrorReport& mirror_report, Budget& b) {
+RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o, bool check,
+                  bool budget, int timeout_ms, MirrorReport& mirror_report, Budget& b) {
   std::unique_ptr<MirrorTransport<B>> mirror;
-  if (check) mirror = std::make_unique<MirrorTransport<B>>(port, false);
+  if (check) mirror = std::make_unique<MirrorTransport<B>>(port);
   Transport& t = check ? static_cast<Transport&>(*mirror) : port;
   LinkClient link(t, timeout_ms);
   link.hello();  // the client learns the device's capacity; the mirror's node gets its HELLO too
@@ -77,8 +77,8 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
 // observations arrive with a covariance so wide (sigma 20 m, 1 rad) that every observation is
 // individually compatible with every landmark: the most expensive gating and grouping, and the
 // widest JCBB tree (which its bound still prunes: no such scan reached the node budget).
-void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Strategy>& strategies,
-                int scans, int timeout_ms, int node_budget) {
+void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Strategy>& strategies, int scans,
+                int timeout_ms, int node_budget) {
   const std::uint32_t budget = node_budget > 0 ? static_cast<std::uint32_t>(node_budget) : caps.max_jcbb_nodes;
   std::printf("worst case: %u observations, each compatible with each of %u landmarks; node budget %u\n",
               caps.max_observations, caps.max_observations, budget);
@@ -172,24 +172,26 @@ int main(int argc, char** argv) {
       LinkClient hello(port, 2000);
       caps = hello.hello(10);  // waits on the handshake itself, no sleep
     }
-    std::printf("firmware %s on %s (%s)\n  boot id %08x, %d-byte scalars, up to %u observations, %u candidates, %u "
-                "landmarks, %u JCBB nodes; schema %08x\n",
-                q.elf.c_str(), machine.pty().c_str(), q.machine.c_str(), caps.boot_id, caps.scalar_bytes,
-                caps.max_observations, caps.max_candidates, caps.max_landmarks, caps.max_jcbb_nodes, caps.schema_hash);
+    std::printf(
+        "firmware %s on %s (%s)\n  boot id %08x, %d-byte scalars, up to %u observations, %u candidates, %u "
+        "landmarks, %u JCBB nodes; schema %08x\n",
+        q.elf.c_str(), machine.pty().c_str(), q.machine.c_str(), caps.boot_id, caps.scalar_bytes, caps.max_observations,
+        caps.max_candidates, caps.max_landmarks, caps.max_jcbb_nodes, caps.schema_hash);
     const bool small = matches<SmallControllerBounds>(caps), dflt = matches<DefaultBounds>(caps),
                large = matches<LargeControllerBounds>(caps);
-    if (check && !small && !dflt && !large) throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
+    if (check && !small && !dflt && !large)
+      throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
     std::vector<Strategy> strategies = select_strategies(names);
-    if (worst > 0 && check) throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
+    if (worst > 0 && check)
+      throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
     if (worst > 0) {
       worst_case(port, caps, strategies, worst, timeout_ms, o.node_budget);
       strategies.clear();
     }
-    if (!strategies.empty()) std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),
-                static_cast<unsigned long long>(seed));
     if (!strategies.empty())
-      std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %9s %s\n", "strategy", "scans", "TP", "TN", "FP",
-                "FN", "precision", "recall", "F1", "|x err| m", "|y err| m", "scans/s", check ? "bit-for-bit" : "");
+      std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),
+                  static_cast<unsigned long long>(seed));
+    if (!strategies.empty()) print_score_header(check ? "bit-for-bit" : "");
     std::vector<Budget> budgets;
     std::ofstream csv;
     if (!budget_csv.empty()) {
@@ -201,8 +203,9 @@ int main(int argc, char** argv) {
       Budget b;
       const auto t0 = std::chrono::steady_clock::now();
       const RunResult r = small ? run_one<SmallControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
-                          : dflt ? run_one<DefaultBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
-                                 : run_one<LargeControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b);
+                          : dflt
+                              ? run_one<DefaultBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
+                              : run_one<LargeControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::string verdict;
       if (check) {
@@ -211,10 +214,7 @@ int main(int argc, char** argv) {
                                      : std::to_string(mr.mismatched) + " DIFFER; first: " + mr.first_mismatch;
         if (mr.mismatched != 0 || mr.assoc_results != static_cast<std::uint64_t>(r.scans)) rc = 1;
       }
-      std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %9.0f %s\n", to_string(s), r.scans,
-                  r.score.tp, r.score.tn, r.score.fp, r.score.fn, r.score.precision(), r.score.recall(), r.score.f1(),
-                  r.mean_abs_x_m, r.mean_abs_y_m, r.scans / secs, verdict.c_str());
-      std::fflush(stdout);
+      print_score_row(s, r, r.scans / secs, verdict);
       if (csv.is_open()) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
           csv << '"' << sc.name << "\"," << to_string(s) << ',' << i << ',' << b.observations[i] << ','
@@ -225,13 +225,13 @@ int main(int argc, char** argv) {
     }
     if (budget && !strategies.empty()) {
       std::printf("instructions per scan (-icount shift=0; median / max over %s's scans)\n", sc.name.c_str());
-      std::printf("  %-8s %13s %13s %13s %13s %9s %13s %13s\n", "strategy", "assoc median", "assoc max",
-                  "step median", "step max", "scans>=20", "assoc20 med", "assoc20 max");
+      std::printf("  %-8s %13s %13s %13s %13s %9s %13s %13s\n", "strategy", "assoc median", "assoc max", "step median",
+                  "step max", "scans>=20", "assoc20 med", "assoc20 max");
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
         std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", to_string(strategies[k]), median(b.associate),
-                    maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(),
-                    median(b.associate20), maximum(b.associate20));
+                    maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(), median(b.associate20),
+                    maximum(b.associate20));
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
@@ -242,11 +242,7 @@ int main(int argc, char** argv) {
       }
     }
     LinkClient link(port, timeout_ms);
-    const proto::Stats st = link.stats();
-    std::printf("firmware STATS: frames ok %u, bad CRC %u, bad length %u, overrun %u, unknown type %u, invalid field "
-                "%u, scans %u, budget hits %u, stack high-water %u bytes\n",
-                st.frames_ok, st.bad_crc, st.bad_length, st.overrun, st.unknown_type, st.invalid_field, st.scans,
-                st.budget_hits, st.stack_high_water_bytes);
+    std::printf("firmware STATS: %s\n", describe_stats(link.stats()).c_str());
     link.shutdown(0);
     const int status = machine.wait_exit(20000);
     std::printf("QEMU exited with status %d (the firmware's semihosting exit)\n", status);

@@ -52,4 +52,28 @@ inline void push(std::uint8_t byte) {
   g_counters.rx_bytes = g_counters.rx_bytes + 1;
 }
 
+/// Thread side, polled transmit for the boards' uart::write: for each byte waits, at most
+/// kTxSpinLimit polls, until `ready()`, then `put(byte)`; a byte whose transmitter stays busy is
+/// dropped and counted (tx_dropped). Bound: n * kTxSpinLimit polls.
+template <class Ready, class Put>
+inline void write_polled(const std::uint8_t* data, std::size_t n, Ready ready, Put put) {
+  for (std::size_t i = 0; i < n; ++i) {  // <= n
+    std::uint32_t spins = 0;
+    while (!ready() && spins < uart::kTxSpinLimit) ++spins;  // <= kTxSpinLimit
+    if (spins == uart::kTxSpinLimit) {
+      g_counters.tx_dropped = g_counters.tx_dropped + 1;
+      continue;
+    }
+    put(data[i]);
+    g_counters.tx_bytes = g_counters.tx_bytes + 1;
+  }
+}
+
+/// Thread side: waits until `done()`, at most kTxSpinLimit polls (uart::flush).
+template <class Done>
+inline void wait_bounded(Done done) {
+  for (std::uint32_t spins = 0; !done() && spins < uart::kTxSpinLimit; ++spins) {
+  }  // <= kTxSpinLimit
+}
+
 }  // namespace geojcbb::port::ring

@@ -71,21 +71,12 @@ void init(std::uint32_t baud) {
 }
 
 void write(const std::uint8_t* data, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) {  // <= n
-    std::uint32_t spins = 0;
-    while ((reg(kSr) & kSrTxe) == 0 && spins < kTxSpinLimit) ++spins;  // <= kTxSpinLimit
-    if (spins == kTxSpinLimit) {
-      g_counters.tx_dropped = g_counters.tx_dropped + 1;
-      continue;
-    }
-    reg(kDr) = data[i];
-    g_counters.tx_bytes = g_counters.tx_bytes + 1;
-  }
+  ring::write_polled(
+      data, n, [] { return (reg(kSr) & kSrTxe) != 0; }, [](std::uint8_t b) { reg(kDr) = b; });
 }
 
 void flush() {
-  for (std::uint32_t spins = 0; (reg(kSr) & kSrTc) == 0 && spins < kTxSpinLimit; ++spins) {
-  }  // <= kTxSpinLimit
+  ring::wait_bounded([] { return (reg(kSr) & kSrTc) != 0; });
 }
 
 }  // namespace uart

@@ -22,6 +22,14 @@ namespace geojcbb::host {
 /// std::invalid_argument naming an unknown one.
 std::vector<Strategy> select_strategies(const std::vector<std::string>& names);
 
+/// The score table the link programs print (geojcbb_link, geojcbb_qemu): a header, then one row per
+/// strategy with TP/TN/FP/FN, precision, recall, F1, mean absolute x/y error and scans/s; `extra`
+/// is a last column (its title in the header, its text in a row).
+void print_score_header(const char* extra = "");
+void print_score_row(Strategy s, const RunResult& r, double scans_per_s, const std::string& extra = "");
+/// A device's STATS as one line: frames and rejections by cause, scans, budget hits, stack.
+std::string describe_stats(const proto::Stats& st);
+
 proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o);
 proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o);
 /// RESET at x0 with P0, each diagonal element at least 1e-6 (the float filter's floor).

@@ -19,25 +19,18 @@
 namespace geojcbb::host {
 
 struct MirrorReport {
-  std::uint64_t compared = 0;     ///< replies compared
-  std::uint64_t mismatched = 0;   ///< replies that differ (type or payload), or have no counterpart
+  std::uint64_t compared = 0;    ///< replies compared
+  std::uint64_t mismatched = 0;  ///< replies that differ (type or payload), or have no counterpart
   std::uint64_t assoc_results = 0, poses = 0;
-  std::string first_mismatch;     ///< a description of the first one
+  std::string first_mismatch;  ///< a description of the first one
 };
 
 template <class B>
 class MirrorTransport : public Transport {
  public:
-  /// @param hello_seen  the device has already had its HELLO: give the reference one too
-  MirrorTransport(Transport& device, bool hello_seen) : dev_(device), ref_(std::make_unique<node::Node<float, B>>()) {
+  /// The device and the in-process node must start together: send the HELLO through this transport.
+  explicit MirrorTransport(Transport& device) : dev_(device), ref_(std::make_unique<node::Node<float, B>>()) {
     ref_->start(node::Output{this, &MirrorTransport::on_ref_bytes}, 0);
-    if (hello_seen) {
-      proto::EncodedFrame f;
-      if (proto::encode_message(proto::Hello{}, 0, 0, f) == proto::Error::kOk) {
-        ref_->on_bytes(f.bytes.data(), f.size);
-      }
-      expected_.clear();  // its CAPABILITIES
-    }
   }
   std::size_t read(std::uint8_t* p, std::size_t n, int timeout_ms) override {
     const std::size_t k = dev_.read(p, n, timeout_ms);
@@ -89,10 +82,11 @@ class MirrorTransport : public Transport {
     if (expected_.empty() || expected_.front().type != f.type || expected_.front().payload != got) {
       ++report_.mismatched;
       if (report_.first_mismatch.empty()) {
-        report_.first_mismatch = "reply " + std::to_string(report_.compared) + ": device type 0x" + hex(f.type) +
-                                 (expected_.empty() ? ", reference had none"
-                                                    : ", reference type 0x" + hex(expected_.front().type) +
-                                                          (expected_.front().type == f.type ? " (payload differs)" : ""));
+        report_.first_mismatch =
+            "reply " + std::to_string(report_.compared) + ": device type 0x" + hex(f.type) +
+            (expected_.empty() ? ", reference had none"
+                               : ", reference type 0x" + hex(expected_.front().type) +
+                                     (expected_.front().type == f.type ? " (payload differs)" : ""));
       }
     }
     if (!expected_.empty()) expected_.pop_front();
