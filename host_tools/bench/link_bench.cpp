@@ -46,7 +46,7 @@ Messages messages(RecordedSource& src, const RunOptions& o, int max_obs) {
   for (const RunInput& in : src.inputs()) {
     m.is_scan.push_back(in.scan);
     if (in.scan) {
-      m.batches.push_back(link_batch(in.observations, in.R, static_cast<std::uint32_t>(m.batches.size()),
+      m.batches.push_back(link_batch(in.observations, static_cast<std::uint32_t>(m.batches.size()),
                                      static_cast<std::size_t>(max_obs), kept));
     } else {
       m.odometry.push_back(link_odometry(in));

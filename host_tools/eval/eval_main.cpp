@@ -72,6 +72,31 @@ struct SimOptions {
   std::string device_info;  ///< the device the runs were streamed to (empty: in process)
 };
 
+// The filter's and the association's robustness switches, the same for sim and mrclam
+// (docs/mrclam.md measures each alone).
+void add_robustness_options(CLI::App& app, RunOptions& run) {
+  app.add_flag("!--no-fej", run.filter.first_estimates_jacobians,
+               "standard EKF Jacobians instead of first-estimates Jacobians");
+  app.add_option("--ambiguity-margin", run.ambiguity_margin,
+                 "decline: pairings that a runner-up hypothesis (as many pairings, joint d2 within this margin) "
+                 "makes differently are left unmatched (0: off)")
+      ->default_val(run.ambiguity_margin)
+      ->check(CLI::Range(0.0, 1e5));
+  app.add_option("--miss-probability", run.landmark_policy.miss_probability,
+                 "remove a landmark (confirmed too) missed in view so often in a row that a static one seen at its "
+                 "rate would be missed so with less than this probability (0: off)")
+      ->default_val(run.landmark_policy.miss_probability)
+      ->check(CLI::Range(0.0, 0.5));
+  app.add_option("--static-gate-level", run.static_gate_level,
+                 "remove a landmark whose estimate leaves, at this chi-square level, the region it was added in "
+                 "(an object that moves; 0: off)")
+      ->default_val(run.static_gate_level)
+      ->check(CLI::Range(0.0, 0.999999));
+  app.add_flag("--new-if-taken,!--no-new-if-taken", run.new_if_candidates_taken,
+               "with mutual exclusion, an observation whose compatible features are all taken by others is new, "
+               "not unmatched");
+}
+
 std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool oracle) {
   std::vector<Method> out;
   if (names.empty()) {
@@ -463,6 +488,7 @@ int main(int argc, char** argv) {
   sim->add_option("--max-misses", so.run.landmark_policy.max_misses, "misses in view that remove a tentative landmark")
       ->default_val(2)
       ->check(CLI::Range(1, 255));
+  add_robustness_options(*sim, so.run);
   LinkCli sim_link;
   add_link_options(*sim, sim_link,
                    "stream every run to the device on this serial port or pty instead of running it in process",
@@ -505,10 +531,40 @@ int main(int argc, char** argv) {
   mr->add_flag(
       "--truth", mo_oracle,
       "add a row TRUTH: association by ground truth (gated), the filter's own accuracy with perfect association");
+  mr->add_flag("--known-map", mo.known_map,
+               "localisation only: the surveyed landmark positions are the map from the start (std 1 cm), nothing "
+               "is added or removed; separates association from mapping");
   mr->add_flag("--drop-other-robots", mo.drop_other_robots,
                "remove measurements of the other robots instead of feeding "
                "them as clutter");
   mr->add_option("--jobs", mo.jobs, "worker threads (default: the number of cores)")->check(CLI::Range(0, 256));
+  mr->add_option("--trace", mo.trace_dir,
+                 "write one CSV per replay into this folder: per scan the pose error, variances, NEES, pairings, NIS");
+  bool mo_legacy = false;
+  mr->add_flag("--legacy-model", mo_legacy,
+               "the constant noise model of before (no calibration): R and the odometry noise from --sigma-* or "
+               "the data's robust spreads x --noise-inflation; the same as --no-camera --no-drive");
+  mr->add_flag("!--no-camera", mo.camera,
+               "do not use the calibrated camera (range and bearing bias, range-proportional R)");
+  mr->add_flag("!--no-drive", mo.drive,
+               "do not use the calibrated drive (command latency and scale, motion-dependent process noise)");
+  mr->add_option("--calibration", mo.calibration,
+                 "fit each robot's camera and drive on: cross (the same robot in the other dataset) or same")
+      ->default_val(mo.calibration)
+      ->check(CLI::IsMember({"cross", "same"}));
+  mr->add_option("--model-inflation", mo.model_inflation, "factor on the calibrated standard deviations")
+      ->default_val(mo.model_inflation)
+      ->check(CLI::Range(0.1, 100.0));
+  mr->add_option("--fit-window", mo.calibration_options.fit_window_s,
+                 "window over which the drive's scale and noise are fitted [s]")
+      ->default_val(mo.calibration_options.fit_window_s)
+      ->check(CLI::Range(0.1, 30.0));
+  // MRCLAM's defaults: the landmark rules that keep the other robots and the missed pairings out of
+  // the map (docs/mrclam.md measures each).
+  mo.run.landmark_policy.miss_probability = 1e-5f;
+  mo.run.static_gate_level = 0.95;
+  mo.run.new_if_candidates_taken = true;
+  add_robustness_options(*mr, mo.run);
   LinkCli mr_link;
   add_link_options(*mr, mr_link,
                    "stream every replay to the device on this serial port or pty instead of running it in process",
@@ -529,6 +585,7 @@ int main(int argc, char** argv) {
       });
     }
     mo.strategies = parse_strategies(mo_strategies, mo_oracle);
+    if (mo_legacy) mo.camera = mo.drive = false;
     return with_device(mr_link, mo_oracle, [&](const RunInputsFn& runner, const std::string&) {
       mo.runner = runner;
       if (runner) mo.jobs = 1;  // one device, one replay at a time

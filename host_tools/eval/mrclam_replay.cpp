@@ -30,19 +30,25 @@ MrclamNoise MrclamNoise::from_data(const mrclam::Dataset& ds, const std::vector<
 
 SensorModel mrclam_sensor(const MrclamNoise& n) { return SensorModel{0.9, 9.3, 1.2, n.sigma_bearing_rad}; }
 
-MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamNoise& noise,
+MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamModel& model,
                            bool drop_other_robots) {
   if (log.odometry.size() < 2 || log.truth.empty()) throw std::runtime_error("robot log without odometry or truth");
+  const mrclam::RobotCalibration& cal = model.calibration;
+  const double k2 = model.inflation * model.inflation;
+  // A command takes effect `lag` after its time stamp.
+  const double lag = model.drive ? cal.latency_s : 0.0;
+  const auto& o = log.odometry;
   // Start where both odometry and ground truth exist.
   std::size_t i = 0;
   mrclam::PoseSample p0{};
-  while (i + 1 < log.odometry.size() && !mrclam::interpolate_truth(log.truth, log.odometry[i].t, p0)) ++i;
-  if (i + 1 >= log.odometry.size()) throw std::runtime_error("no odometry sample has a ground-truth pose");
+  while (i + 1 < o.size() && !mrclam::interpolate_truth(log.truth, o[i].t + lag, p0)) ++i;
+  if (i + 1 >= o.size()) throw std::runtime_error("no odometry sample has a ground-truth pose");
+  const MrclamNoise& noise = model.noise;
   sensor = mrclam_sensor(noise);
   true_landmarks = ds.landmarks.size();
   x0 = Pose2<double>{p0.x, p0.y, p0.theta};
   P0 = Eigen::Matrix3d::Identity() * 1e-6;
-  const Eigen::Matrix2d R =
+  const Eigen::Matrix2d R_const =
       Eigen::Vector2d(noise.sigma_range_m * noise.sigma_range_m, noise.sigma_bearing_rad * noise.sigma_bearing_rad)
           .asDiagonal();
   // Landmark index of each subject.
@@ -51,29 +57,52 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
     const int s = ds.landmarks[k].subject;
     if (s >= 0 && s < static_cast<int>(index_of_subject.size())) index_of_subject[s] = static_cast<int>(k);
   }
-  double t = log.odometry[i].t;
-  auto advance = [&](double to) {  // predict from t to `to` with the command of
-                                   // sample i
+  auto push_motion = [&](double v, double w, double dt, double extra_v_std, double extra_w_std) {
+    RunInput in;
+    if (model.drive) {
+      ekf::Odometry<double> u;
+      if (cal.drive.odometry(v, w, dt, u) != Status::kOk) throw std::runtime_error("drive model: bad odometry");
+      in.v_mps = u.v_mps;
+      in.w_radps = u.w_radps;
+      in.sigma_v_mps = std::sqrt(k2 * u.sigma_v_mps * u.sigma_v_mps + extra_v_std * extra_v_std);
+      in.sigma_w_radps = std::sqrt(k2 * u.sigma_w_radps * u.sigma_w_radps + extra_w_std * extra_w_std);
+    } else {
+      const double k = 1.0 / std::sqrt(std::max(dt, 1e-6));
+      in.v_mps = v;
+      in.w_radps = w;
+      in.sigma_v_mps = noise.sigma_v_mps * k;
+      in.sigma_w_radps = noise.sigma_w_radps * k;
+    }
+    in.dt_s = dt;
+    inputs_.push_back(std::move(in));
+  };
+  double t = o[i].t + lag;
+  auto advance = [&](double to) {  // predict from t to `to` with the command of sample i
     while (t < to) {               // the hold limit splits a gap into a moving and a stopped part
-      const double hold_end = log.odometry[i].t + kHoldLimit_s;
+      const double start = o[i].t + lag;
+      const double hold_end = start + kHoldLimit_s;
       const bool moving = t < hold_end;
       const double end = moving ? std::min(to, hold_end) : to;
       const double dt = end - t;
-      const double k = 1.0 / std::sqrt(std::max(dt, 1e-6));
-      RunInput in;
-      in.v_mps = moving ? log.odometry[i].v : 0.0;
-      in.w_radps = moving ? log.odometry[i].w : 0.0;
-      in.dt_s = dt;
-      in.sigma_v_mps = noise.sigma_v_mps * k;
-      in.sigma_w_radps = noise.sigma_w_radps * k;
-      inputs_.push_back(std::move(in));
+      if (moving || !model.drive) {
+        push_motion(moving ? o[i].v : 0.0, moving ? o[i].w : 0.0, dt, 0, 0);
+      } else {
+        // The rest of a gap: the robot goes on with the held command (the log only missed samples;
+        // measured: 0.9 of the held motion at the median, 0.6-1.05 between the 10th and 90th
+        // percentiles, docs/mrclam.md), with an extra std of kGapMotionStd of that motion over
+        // the rest L, spread over the pieces in proportion to their length.
+        const double gap_end = i + 1 < o.size() ? o[i + 1].t + lag : end;
+        const double L = std::max(gap_end - hold_end, dt);
+        const double f = kGapMotionStd * std::sqrt(L / dt);
+        push_motion(o[i].v, o[i].w, dt, std::abs(o[i].v) * cal.drive.scale_v * f, std::abs(o[i].w) * cal.drive.scale_w * f);
+      }
       t = end;
     }
   };
   for (const mrclam::Scan& scan : log.scans) {
     if (scan.t < t) continue;  // before the start
-    while (i + 1 < log.odometry.size() && log.odometry[i + 1].t <= scan.t) {
-      advance(log.odometry[i + 1].t);
+    while (i + 1 < o.size() && o[i + 1].t + lag <= scan.t) {
+      advance(o[i + 1].t + lag);
       ++i;
     }
     advance(scan.t);
@@ -84,20 +113,27 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
       if (drop_other_robots && m.subject >= 1 && m.subject <= mrclam::kRobots) continue;
       const int truth =
           m.subject >= 0 && m.subject < static_cast<int>(index_of_subject.size()) ? index_of_subject[m.subject] : -1;
-      obs.push_back({Eigen::Vector2d(m.range, m.bearing), truth});
+      SimObservation so{Eigen::Vector2d(m.range, m.bearing), truth, R_const};
+      if (model.camera) {
+        Vec2<double> z;
+        Mat2<double> R;
+        if (cal.sensor.correct(so.z, z, R) != Status::kOk) continue;  // a non-positive range: not a measurement
+        so.z = z;
+        so.R = k2 * R;
+      }
+      obs.push_back(so);
     }
     mrclam::PoseSample pt{};
     in.have_truth = mrclam::interpolate_truth(log.truth, scan.t, pt);
     in.true_pose = Pose2<double>{pt.x, pt.y, pt.theta};
-    in.R = R;
     in.t_s = scan.t;
     inputs_.push_back(std::move(in));
   }
 }
 
 RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& opt,
-                       const MrclamNoise& noise, bool drop_other_robots) {
-  MrclamSource src(ds, log, noise, drop_other_robots);
+                       const MrclamModel& model, bool drop_other_robots) {
+  MrclamSource src(ds, log, model, drop_other_robots);
   return run_inputs(src, opt);
 }
 
@@ -119,7 +155,28 @@ std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
   return g;
 }
 
+namespace {
+void write_trace(const std::string& path, const RunResult& res) {
+  {
+    std::ofstream m(path.substr(0, path.size() - 4) + "_map.csv");
+    m.precision(10);
+    m << "x_m,y_m,truth\n";
+    for (const MapLandmark& l : res.map) m << l.x << ',' << l.y << ',' << l.truth << '\n';
+  }
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  f.precision(10);
+  f << "t_s,ex_m,ey_m,etheta_rad,var_x,var_y,var_theta,nees,paired,nis_sum\n";
+  for (const StepRecord& s : res.steps) {
+    f << s.t_s << ',' << s.estimate.x - s.truth.x << ',' << s.estimate.y - s.truth.y << ','
+      << wrap_angle(s.estimate.theta - s.truth.theta) << ',' << s.var_x << ',' << s.var_y << ',' << s.var_theta << ','
+      << s.pose_nees << ',' << s.paired << ',' << s.nis_sum << '\n';
+  }
+}
+}  // namespace
+
 int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool progress) {
+  if (!o.trace_dir.empty()) std::filesystem::create_directories(o.trace_dir);
   const std::string root = o.data_dir.empty() ? mrclam::default_data_dir() : o.data_dir;
   std::filesystem::create_directories(out_dir);
   struct DatasetData {
@@ -127,7 +184,11 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     mrclam::Dataset ds;
     std::vector<mrclam::RobotLog> logs;
     MrclamNoise noise;
+    std::vector<mrclam::RobotCalibration> calibration;  ///< per log
   };
+  if (o.calibration != "cross" && o.calibration != "same") {
+    throw std::runtime_error("calibration: 'cross' or 'same' expected, not '" + o.calibration + "'");
+  }
   std::vector<DatasetData> data;
   for (int n : o.datasets) {
     DatasetData d;
@@ -139,6 +200,20 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     if (o.sigma_bearing_rad > 0) d.noise.sigma_bearing_rad = o.sigma_bearing_rad;
     if (o.sigma_v_mps > 0) d.noise.sigma_v_mps = o.sigma_v_mps;
     if (o.sigma_w_radps > 0) d.noise.sigma_w_radps = o.sigma_w_radps;
+    if (o.camera || o.drive) {
+      // "cross": the same robot of the other dataset (the robots and cameras are the same in 6 and 7).
+      const int other = n == 6 ? 7 : 6;
+      mrclam::Dataset cds;
+      if (o.calibration == "cross") cds = mrclam::load_dataset(mrclam::dataset_dir(other, root));
+      for (std::size_t r = 0; r < d.logs.size(); ++r) {
+        if (o.calibration == "same") {
+          d.calibration.push_back(mrclam::calibrate_robot(d.ds, d.logs[r], o.calibration_options));
+        } else {
+          d.calibration.push_back(
+              mrclam::calibrate_robot(cds, mrclam::load_robot(cds, d.logs[r].robot), o.calibration_options));
+        }
+      }
+    }
     data.push_back(std::move(d));
   }
   struct Job {
@@ -157,9 +232,18 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     RunOptions ro = o.run;
     o.strategies[jb.s].apply(ro);
     ro.landmark_group = landmark_groups(data[jb.d].ds, kLandmarkGroupRadius_m);
+    if (o.known_map) {
+      for (const mrclam::Landmark& l : data[jb.d].ds.landmarks) ro.known_map.emplace_back(l.x, l.y);
+    }
     const auto a = std::chrono::steady_clock::now();
     try {
-      MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], data[jb.d].noise, o.drop_other_robots);
+      MrclamModel model;
+      model.noise = data[jb.d].noise;
+      model.camera = o.camera;
+      model.drive = o.drive;
+      model.inflation = o.model_inflation;
+      if (!data[jb.d].calibration.empty()) model.calibration = data[jb.d].calibration[jb.r];
+      MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
       jb.error = e.what();
@@ -209,6 +293,9 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
           continue;
         }
         const RunResult& res = jb.res;
+        if (!o.trace_dir.empty()) write_trace(o.trace_dir + "/trace_" + std::to_string(dd.number) + "_" +
+                                                  std::to_string(dd.logs[r].robot) + "_" + o.strategies[s].name() + ".csv",
+                                              res);
         const double f1 = res.score.f1();
         std::printf("   %.3f/%.3f", f1, res.group_score.f1());
         if (o.strategies[s].oracle) {
@@ -232,6 +319,14 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         row.abs_y = (std::isnan(row.abs_y) ? 0 : row.abs_y) + w * res.mean_abs_y_m;
         row.landmarks = (std::isnan(row.landmarks) ? 0 : row.landmarks) + res.landmarks;
         row.spurious_in_map = (std::isnan(row.spurious_in_map) ? 0 : row.spurious_in_map) + res.spurious_in_map;
+        row.fp_clutter += res.fp_clutter;
+        {
+          std::vector<int> per_truth(dd.ds.landmarks.size(), 0);
+          int dup = 0;
+          for (const MapLandmark& l : res.map)
+            if (l.truth >= 0 && per_truth[static_cast<std::size_t>(l.truth)]++ > 0) ++dup;
+          row.duplicates = (std::isnan(row.duplicates) ? 0 : row.duplicates) + dup;
+        }
         double nees = 0;
         for (const StepRecord& st : res.steps) nees += st.pose_nees;
         row.anees = (std::isnan(row.anees) ? 0 : row.anees) + (res.steps.empty() ? 0 : nees / res.steps.size());
@@ -248,6 +343,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       row.abs_x /= row.runs;
       row.abs_y /= row.runs;
       row.landmarks /= row.runs;
+      row.duplicates = o.runner ? NAN : row.duplicates / row.runs;
       row.spurious_in_map = o.runner ? NAN : row.spurious_in_map / row.runs;  // a device does not report its map
       row.anees /= row.runs;  // mean over robots of each run's time-averaged
                               // NEES (no Monte Carlo bounds)
@@ -256,6 +352,16 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         "All robots of the dataset (ANEES: mean over robots of the "
         "time-averaged pose NEES; 3 if consistent)\n");
     print_tables(rows, stdout);
+    std::printf("Summary per strategy (landmarks, duplicates and spurious: in the final map, mean per robot; FP of clutter: "
+                "other robots or false detections paired)\n  %-9s %7s %9s %7s %10s %10s %9s %13s %8s %9s\n",
+                "strategy", "F1", "precision", "recall", "landmarks", "duplicates", "spurious", "FP of clutter",
+                "ANEES", "group F1");
+    for (std::size_t s = 0; s < rows.size(); ++s) {
+      const ReportRow& w = rows[s];
+      std::printf("  %-9s %7.4f %9.4f %7.4f %10.1f %10.1f %9.1f %13d %8.2f %9.4f\n", w.name.c_str(), w.score.f1(),
+                  w.score.precision(), w.score.recall(), w.landmarks, w.duplicates, w.spurious_in_map, w.fp_clutter,
+                  w.anees, group_rows[s].score.f1());
+    }
     std::printf(
         "Table 2 at landmark-group level (a pair is correct when its "
         "feature's landmark is in the observed "

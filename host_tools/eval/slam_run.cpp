@@ -45,6 +45,7 @@ void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId
     if (f >= 0) {
       const int ft = truth_of(f);
       ++((t >= 0 && ft == t) ? res_.score.tp : res_.score.fp);
+      res_.fp_clutter += t < 0;
       ++((t >= 0 && ft >= 0 && cls(ft) == cls(t)) ? res_.group_score.tp : res_.group_score.fp);
     } else if (known) {
       ++res_.score.fn;
@@ -87,12 +88,19 @@ void RunScorer::pose(double t_s, const Pose2<double>& truth, const Pose2<double>
   r.estimate = estimate;
   r.var_x = P(0, 0);
   r.var_y = P(1, 1);
+  r.var_theta = P(2, 2);
   const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
                           wrap_angle(r.estimate.theta - r.truth.theta));
   r.pose_nees = e.dot(P.ldlt().solve(e));
   res_.mean_abs_x_m += std::abs(e.x());
   res_.mean_abs_y_m += std::abs(e.y());
   res_.steps.push_back(r);
+}
+
+void RunScorer::nis(int paired, double nis_sum) {
+  if (res_.steps.empty()) return;
+  res_.steps.back().paired = paired;
+  res_.steps.back().nis_sum = nis_sum;
 }
 
 RunResult RunScorer::finish() const {
@@ -163,14 +171,33 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   ss.params.groups = opt.groups;
   ss.params.condition_groups = opt.condition_groups;
   ss.params.node_budget = opt.node_budget;
+  ss.params.ambiguity_margin = opt.ambiguity_margin;
+  ss.params.new_if_candidates_taken = opt.new_if_candidates_taken;
   ss.new_landmark_level = opt.new_landmark_gate;
   ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
   ss.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
   ss.policy = opt.landmark_policy;
+  if (opt.static_gate_level > 0) {
+    double g = 0;
+    check(chi2_inv(opt.static_gate_level, 2, g), "chi2_inv");
+    ss.policy.static_gate_d2 = static_cast<float>(g);
+  }
+  ss.filter = opt.filter;
+  if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed
+    ss.augment = false;
+    ss.policy = ekf::LandmarkPolicy{};
+    ss.policy.confirm_hits = 1;
+  }
   check(s.step.configure(ss), "configure");
   s.scorer = std::make_unique<RunScorer>(true_landmarks, opt.landmark_group);
   check(s.step.reset(x0, P0), "reset");
+  const double v = opt.known_map_sigma_m * opt.known_map_sigma_m;
+  for (std::size_t k = 0; k < opt.known_map.size(); ++k) {
+    FeatureId id = -1;
+    check(s.step.add_known_landmark(opt.known_map[k], Eigen::Matrix2d::Identity() * v, id), "add_known_landmark");
+    s.scorer->added(id, static_cast<int>(k));
+  }
 }
 
 SlamSession::~SlamSession() = default;
@@ -181,7 +208,7 @@ void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
   check(st_->step.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
 }
 
-void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& R, double t_s,
+void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
                        const Pose2<double>* truth) {
   State& s = *st_;
   RunScorer& sc = *s.scorer;
@@ -194,7 +221,7 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
     scan.resize(EB::kMaxObservations);
   }
   s.obs.clear();
-  for (const SimObservation& o : scan) check(s.obs.push(o.z, R), "push");
+  for (const SimObservation& o : scan) check(s.obs.push(o.z, o.R), "push");
   ekf::LocalMapStats ls;
   check(s.step.prepare(ls), "predict_local");
   const auto t0 = std::chrono::steady_clock::now();
@@ -237,6 +264,14 @@ void SlamSession::scan(std::vector<SimObservation> scan, const Eigen::Matrix2d& 
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
   sc.pose(t_s, *truth, slam.pose(), P);
+  int paired = 0;
+  double nis = 0;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (s.out.feature[i] < 0) continue;
+    ++paired;
+    nis += s.out.d2[i];
+  }
+  sc.nis(paired, nis);
 }
 
 RunResult SlamSession::finish() {
@@ -277,8 +312,6 @@ bool SimSource::next(RunInput& in) {
     scan_due_ = false;
     in.scan = true;
     in.observations = step_.observations;
-    in.R = Eigen::Vector2d(sc_.sigma_range_m * sc_.sigma_range_m, sc_.sigma_bearing_rad * sc_.sigma_bearing_rad)
-               .asDiagonal();
     in.t_s = step_.t_s;
     in.have_truth = true;
     in.true_pose = step_.true_pose;
@@ -321,7 +354,7 @@ RunResult run_inputs(RunSource& src, const RunOptions& opt) {
   RunInput in;
   while (src.next(in)) {
     if (in.scan) {
-      session.scan(in.observations, in.R, in.t_s, in.have_truth ? &in.true_pose : nullptr);
+      session.scan(in.observations, in.t_s, in.have_truth ? &in.true_pose : nullptr);
     } else {
       session.predict(in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps);
     }

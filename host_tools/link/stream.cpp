@@ -106,8 +106,8 @@ proto::Odometry link_odometry(const Scenario& sc, const SimStep& step) {
   return link_odometry(SimSource::prediction(sc, step));
 }
 
-LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Matrix2d& R, std::uint32_t batch_id,
-                        std::size_t max_obs, std::vector<int>& kept) {
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::size_t max_obs,
+                        std::vector<int>& kept) {
   std::vector<SimObservation> s = scan;
   std::sort(s.begin(), s.end(), [](const auto& a, const auto& b) { return a.z.x() < b.z.x(); });
   if (s.size() > std::min(max_obs, kLinkMaxObs)) s.resize(std::min(max_obs, kLinkMaxObs));
@@ -116,6 +116,7 @@ LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Ma
   b.count = static_cast<std::uint8_t>(s.size());
   kept.clear();
   for (std::size_t i = 0; i < s.size(); ++i) {
+    const Eigen::Matrix2d& R = s[i].R;
     b.obs[i] =
         proto::ObservationWire{static_cast<float>(s[i].z.x()), static_cast<float>(s[i].z.y()),
                                static_cast<float>(R(0, 0)), static_cast<float>(R(0, 1)), static_cast<float>(R(1, 1))};
@@ -124,11 +125,8 @@ LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Ma
   return b;
 }
 
-LinkObsBatch link_batch(const Scenario& sc, const std::vector<SimObservation>& scan, std::uint32_t batch_id,
-                        std::vector<int>& kept) {
-  const Eigen::Matrix2d R =
-      Eigen::Vector2d(sc.sigma_range_m * sc.sigma_range_m, sc.sigma_bearing_rad * sc.sigma_bearing_rad).asDiagonal();
-  return link_batch(scan, R, batch_id, kLinkMaxObs, kept);
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::vector<int>& kept) {
+  return link_batch(scan, batch_id, kLinkMaxObs, kept);
 }
 
 namespace {
@@ -199,7 +197,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       continue;
     }
     InFlight f;
-    f.batch = link_batch(in.observations, in.R, next_batch++, max_obs, f.truth);
+    f.batch = link_batch(in.observations, next_batch++, max_obs, f.truth);
     const int dropped = static_cast<int>(in.observations.size()) - static_cast<int>(f.batch.count);
     if (dropped > 0) {
       res.dropped_observations += dropped;

@@ -117,7 +117,23 @@ void read_timed(const std::string& path, int n, std::vector<bool> integer, F&& o
   });
 }
 
-ResidualStats stats(std::vector<double> x) {
+// The mean of a piecewise-constant signal (each sample's value held until the next) over [a, b].
+template <class Get>
+double held_mean(const std::vector<OdometrySample>& o, double a, double b, Get get) {
+  auto it = std::upper_bound(o.begin(), o.end(), a, [](double t, const OdometrySample& s) { return t < s.t; });
+  std::size_t k = it == o.begin() ? 0 : static_cast<std::size_t>(it - o.begin()) - 1;
+  double sum = 0, t = a;
+  for (; k < o.size() && t < b; ++k) {
+    const double next = k + 1 < o.size() ? std::min(o[k + 1].t, b) : b;
+    if (next > t) sum += get(o[k]) * (next - t);
+    t = std::max(t, next);
+  }
+  return sum / (b - a);
+}
+
+}  // namespace
+
+ResidualStats residual_stats(std::vector<double> x) {
   ResidualStats s;
   if (x.empty()) return s;
   const double n = static_cast<double>(x.size());
@@ -139,22 +155,6 @@ ResidualStats stats(std::vector<double> x) {
   s.robust_std = 1.4826 * median(x);
   return s;
 }
-
-// The mean of a piecewise-constant signal (each sample's value held until the next) over [a, b].
-template <class Get>
-double held_mean(const std::vector<OdometrySample>& o, double a, double b, Get get) {
-  auto it = std::upper_bound(o.begin(), o.end(), a, [](double t, const OdometrySample& s) { return t < s.t; });
-  std::size_t k = it == o.begin() ? 0 : static_cast<std::size_t>(it - o.begin()) - 1;
-  double sum = 0, t = a;
-  for (; k < o.size() && t < b; ++k) {
-    const double next = k + 1 < o.size() ? std::min(o[k + 1].t, b) : b;
-    if (next > t) sum += get(o[k]) * (next - t);
-    t = std::max(t, next);
-  }
-  return sum / (b - a);
-}
-
-}  // namespace
 
 int Dataset::subject_of(int barcode) const {
   const auto it = barcode_to_subject.find(barcode);
@@ -271,8 +271,8 @@ MeasurementNoise estimate_measurement_noise(const Dataset& ds, const std::vector
   }
   n.count = static_cast<long>(dr.size());
   n.outlier_fraction = n.count > 0 ? static_cast<double>(n.outliers) / static_cast<double>(n.count) : 0;
-  n.range = stats(std::move(dr));
-  n.bearing = stats(std::move(db));
+  n.range = residual_stats(std::move(dr));
+  n.bearing = residual_stats(std::move(db));
   return n;
 }
 
@@ -303,8 +303,8 @@ OdometryNoise estimate_odometry_noise(const std::vector<RobotLog>& robots, doubl
     }
   }
   n.windows = static_cast<long>(dv.size());
-  n.v = stats(std::move(dv));
-  n.w = stats(std::move(dw));
+  n.v = residual_stats(std::move(dv));
+  n.w = residual_stats(std::move(dw));
   return n;
 }
 

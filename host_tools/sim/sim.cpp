@@ -107,20 +107,22 @@ bool Simulator::step(SimStep& out) {
   out.scan = k_ % s_.observe_every == 0;
   out.observations.clear();
   if (!out.scan) return true;
+  const Eigen::Matrix2d R =
+      Eigen::Vector2d(s_.sigma_range_m * s_.sigma_range_m, s_.sigma_bearing_rad * s_.sigma_bearing_rad).asDiagonal();
   for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
     const Vec2<double> z = observe(x_, Vec2<double>(s_.landmarks[j]));
     if (z.x() > s_.max_range_m || z.x() < s_.min_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
     if (u(rng_) >= s_.detection_probability) continue;
     out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),
                                                 wrap_angle(z.y() + k * s_.sigma_bearing_rad * g(rng_))),
-                                static_cast<int>(j)});
+                                static_cast<int>(j), R});
   }
   std::poisson_distribution<int> clutter(s_.clutter_per_scan);
   for (int c = clutter(rng_); c > 0; --c) {
     // Uniform over the annulus sector between min and max range.
     const double r0 = s_.min_range_m, r1 = s_.max_range_m;
     const double r = std::sqrt(r0 * r0 + (r1 * r1 - r0 * r0) * u(rng_));
-    out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1});
+    out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1, R});
   }
   std::shuffle(out.observations.begin(), out.observations.end(), rng_);
   return true;

@@ -25,13 +25,13 @@ TEST_CASE("scoring: TP, TN, FP, FN on a hand-computed sequence of scans") {
   const Eigen::Matrix2d R = Eigen::Vector2d(0.01 * 0.01, 0.001 * 0.001).asDiagonal();
   const Pose2<double> truth{0, 0, 0};
   // Scan 1: landmark 0, map empty -> TN, and it becomes feature 0.
-  s.scan({{Eigen::Vector2d(10, 0), 0}}, R, 1, &truth);
+  s.scan({{Eigen::Vector2d(10, 0), 0, R}}, 1, &truth);
   // Scan 2: landmark 1 at landmark 0's spot -> paired with feature 0: FP
   // (group: TP). Landmark 0 measured far from where it is (0.5 rad off) -> left
   // unpaired while mapped: FN. Clutter far from everything -> TN.
-  s.scan({{Eigen::Vector2d(10, 0), 1}, {Eigen::Vector2d(10, 0.5), 0}, {Eigen::Vector2d(5, -1), -1}}, R, 2, &truth);
+  s.scan({{Eigen::Vector2d(10, 0), 1, R}, {Eigen::Vector2d(10, 0.5), 0, R}, {Eigen::Vector2d(5, -1), -1, R}}, 2, &truth);
   // Scan 3: landmark 0 where it is -> TP.
-  s.scan({{Eigen::Vector2d(10, 0), 0}}, R, 3, &truth);
+  s.scan({{Eigen::Vector2d(10, 0), 0, R}}, 3, &truth);
   const RunResult r = s.finish();
   CHECK(r.scans == 3);
   CHECK(r.observations == 5);
@@ -79,7 +79,9 @@ TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
   CHECK(noise.sigma_bearing_rad > 0.005);
   RunOptions o;
   o.landmark_group = g;
-  const RunResult r = replay_robot(ds, logs[0], o, noise);
+  MrclamModel model;
+  model.noise = noise;
+  const RunResult r = replay_robot(ds, logs[0], o, model);
   std::size_t measurements = 0;
   for (const mrclam::Scan& s : logs[0].scans) measurements += s.z.size();
   const Score& a = r.score;

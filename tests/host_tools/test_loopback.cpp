@@ -148,7 +148,7 @@ TEST_CASE("loopback: periodic STATS reach last_stats() between replies, and SHUT
     while (batch < 35 && sim.step(step)) {
       link.odometry(link_odometry(sc, step));
       if (!step.scan) continue;
-      const LinkClient::ScanReply r = link.scan(link_batch(sc, step.observations, batch, kept));
+      const LinkClient::ScanReply r = link.scan(link_batch(step.observations, batch, kept));
       CHECK(r.result.batch_id == batch);
       ++batch;
     }

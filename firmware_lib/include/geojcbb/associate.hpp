@@ -1,7 +1,8 @@
 // The association pipeline: the only file that knows the order of the stages.
 //   validate -> local region + individual gate -> group (none | k-means | DBSCAN | GMM-EM)
 //   -> search per group (ICNN | JCBB, one node budget shared by the groups)
-//   -> merge (mutual exclusion across groups, joint re-check) -> result
+//   -> merge (mutual exclusion across groups, joint re-check) -> decline (ambiguous pairings left
+//   kUnmatched, when an ambiguity margin is set) -> result
 // No heap: all working memory is the caller's Workspace; outputs are written only on kOk.
 #pragma once
 
@@ -30,6 +31,7 @@ struct Workspace {
   EmWorkspace<T, B> em;
   MergeWorkspace<T, B> merge;
   std::array<Hypothesis, B::kMaxObservations> hyp;
+  std::array<bool, B::kMaxObservations> declined;  ///< per observation: ambiguous (decline stage)
 };
 
 namespace pipeline_detail {
@@ -60,6 +62,24 @@ void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, Wo
   }
 }
 
+/// Decline stage: the pairings of observations marked ambiguous are removed (they become
+/// kUnmatched). Returns whether any was.
+template <typename T, class B>
+bool apply_decline(int m, Workspace<T, B>& ws, AssociationDiagnostics& diag) {
+  bool any = false;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (!ws.declined[i]) continue;
+    if (ws.hyp[i] >= 0) {
+      ws.hyp[i] = -1;
+      ++diag.declined;
+      any = true;
+    } else {
+      ws.declined[i] = false;  // unpaired anyway: nothing to decline
+    }
+  }
+  return any;
+}
+
 }  // namespace pipeline_detail
 
 /// Associates one scan's observations with the predicted candidates.
@@ -81,10 +101,25 @@ template <typename T, class B>
   AssociationDiagnostics diag{};
   build_compatibility(obs, pred, cfg, ws.table, diag);
   T joint_d2 = T(0);
+  const bool decline = cfg.ambiguity_margin > T(0);
+  for (int i = 0; i < m; ++i) ws.declined[i] = false;  // <= kMaxObservations
   if (cfg.search == SearchMethod::kIcnn) {
     SearchOutcome<T, B>& o = ws.outcome;
     icnn_search(m, cfg.mutual_exclusion, ws.table, ws.jcbb, pred.count, o);
-    for (int i = 0; i < m; ++i) ws.hyp[i] = o.best[i];  // <= kMaxObservations
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      ws.hyp[i] = o.best[i];
+      if (!decline || o.best[i] < 0) continue;
+      // Ambiguous: another compatible candidate within the margin of the chosen one.
+      const CompatibilityTable<T, B>& t = ws.table;
+      T chosen = T(0);
+      for (int q = 0; q < t.count[i]; ++q)  // <= kMaxCandidates
+        if (t.cand[i][q] == o.best[i]) chosen = t.d2[i][q];
+      for (int q = 0; q < t.count[i]; ++q) {  // <= kMaxCandidates
+        const T gap = t.d2[i][q] > chosen ? t.d2[i][q] - chosen : chosen - t.d2[i][q];
+        if (t.cand[i][q] != o.best[i] && gap < cfg.ambiguity_margin) ws.declined[i] = true;
+      }
+    }
+    if (decline) pipeline_detail::apply_decline(m, ws, diag);
     s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
     if (s != Status::kOk) return s;
   } else {
@@ -101,7 +136,9 @@ template <typename T, class B>
       diag.jcbb_nodes += o.nodes;
       diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
       for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-        if (ws.groups.label[i] == g) ws.hyp[i] = o.best[i];
+        if (ws.groups.label[i] != g) continue;
+        ws.hyp[i] = o.best[i];
+        ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
       }
       joint_d2 = o.joint_d2;
     }
@@ -116,8 +153,21 @@ template <typename T, class B>
     diag.recheck_dropped = ms.repair_dropped;
     diag.jcbb_nodes += ms.repair_nodes;
     diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
+    if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
+      s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
+      if (s != Status::kOk) return s;
+    }
   }
 
+  // With mutual exclusion a feature explains one observation: an unpaired observation whose every
+  // compatible candidate is taken by another's pairing cannot be any of them (a new landmark, or
+  // clutter), so its d2 for the filter's augmentation gate is the nearest over the others.
+  const bool taken_rule = cfg.mutual_exclusion && cfg.new_if_candidates_taken;
+  if (taken_rule) {
+    for (int j = 0; j < pred.count; ++j) ws.jcbb.used[j] = 0;  // <= kMaxCandidates
+    for (int i = 0; i < m; ++i)                                // <= kMaxObservations
+      if (ws.hyp[i] >= 0) ws.jcbb.used[ws.hyp[i]] = 1;
+  }
   int pairings = 0;
   out.count = m;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
@@ -129,8 +179,12 @@ template <typename T, class B>
       const Mat2<T> S = pred.C.template block<2, 2>(2 * c, 2 * c) + obs.R[i];
       out.d2[i] = mahalanobis2(innovation(obs.z[i], pred.h[c]), S);
     } else {
-      out.feature[i] = ws.table.count[i] == 0 ? kNewFeature : kUnmatched;
-      out.d2[i] = ws.table.nearest_d2[i];
+      bool free_compatible = false;  // a compatible candidate that no pairing holds
+      for (int q = 0; q < ws.table.count[i] && !free_compatible; ++q)  // <= kMaxCandidates
+        free_compatible = !taken_rule || ws.jcbb.used[ws.table.cand[i][q]] == 0;
+      out.feature[i] = free_compatible || ws.declined[i] ? kUnmatched : kNewFeature;
+      out.d2[i] = ws.table.count[i] > 0 && !free_compatible ? ws.table.nearest_incompatible_d2[i]
+                                                            : ws.table.nearest_d2[i];
     }
   }
   out.pairings = pairings;

@@ -146,7 +146,10 @@ TEST_CASE_TEMPLATE("predict_local: C equals an explicit dense H P H^T; the regio
   for (int a = 0; a < n; ++a) {
     Mat23<double> Jp;
     Mat2<double> Jl;
-    const Vec2<double> h = observe(xd, Vec2<double>(f->slam.landmark(f->pred.id[a]).template cast<double>()), &Jp, &Jl);
+    const int j = f->slam.index_of(f->pred.id[a]);
+    const Vec2<double> h = observe(xd, Vec2<double>(f->slam.landmark(j).template cast<double>()));
+    // H at the filter's linearisation point (the first estimate with FEJ, the default).
+    observe(xd, Vec2<double>(f->slam.linearisation_point(j).template cast<double>()), &Jp, &Jl);
     CHECK(h.x() >= prev);  // nearest first
     prev = h.x();
     H.block<2, 3>(2 * a, 0) = Jp;

@@ -50,6 +50,17 @@ struct AssociationConfig {
   bool mutual_exclusion = false;
   /// Among hypotheses with the most pairings, the one with the smallest joint d2 (eq. 14).
   bool optimal_criterion = false;
+  /// Our addition, decline instead of guessing: when > 0, the search also finds the runner-up
+  /// hypothesis (another with as many pairings, joint d2 within this margin of the best's); the
+  /// observations it pairs differently are left kUnmatched (neither paired nor new). For ICNN: an
+  /// observation whose second-nearest compatible candidate is within this margin of its nearest.
+  /// 0: off (the papers' methods).
+  T ambiguity_margin = T(0);
+  /// Our addition, with mutual exclusion: an unpaired observation whose every compatible candidate
+  /// is held by another observation's pairing cannot be any of them, so it is reported new
+  /// (kNewFeature, its d2 the nearest over the other candidates) instead of kUnmatched; a second
+  /// landmark next to a mapped one can then be mapped when both are seen together. Off: kUnmatched.
+  bool new_if_candidates_taken = false;
   /// Search observations with the fewest compatible candidates first (smaller tree, same answer).
   bool order_fewest_candidates_first = true;
   /// Interpretation-tree nodes per scan, shared by every group's search, 1 .. B::kMaxJcbbNodes.

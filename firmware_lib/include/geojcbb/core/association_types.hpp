@@ -66,6 +66,7 @@ struct AssociationDiagnostics {
   std::uint16_t merge_conflicts = 0;     ///< features claimed by two groups (mutual exclusion)
   bool recheck_failed = false;           ///< the merged union failed the joint test and was repaired
   std::uint16_t recheck_dropped = 0;     ///< pairings the repair removed
+  std::uint16_t declined = 0;            ///< pairings left kUnmatched as ambiguous (ambiguity_margin)
 };
 
 template <typename T, class B>

@@ -39,6 +39,8 @@ struct StrategyParams {
   bool joint_recheck = true;
   bool condition_groups = false;  ///< our conditioned group search (AssociationConfig)
   int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
+  double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
+  bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
 };
 
 /// Builds a strategy's configuration.
@@ -68,6 +70,9 @@ template <typename T, class B>
   c.joint_recheck = p.joint_recheck;
   c.condition_groups = p.condition_groups;
   c.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
+  if (!(p.ambiguity_margin >= 0) || !(p.ambiguity_margin < 1e6)) return Status::kInvalidInput;
+  c.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
+  c.new_if_candidates_taken = p.new_if_candidates_taken;
   out = c;
   return Status::kOk;
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "geojcbb/core/range_bearing.hpp"
+#include "geojcbb/core/status.hpp"
 
 namespace geojcbb::ekf {
 
@@ -40,5 +41,48 @@ Pose2<T> move(const Pose2<T>& x, const Odometry<T>& u, Mat3<T>* J_x_pose = nullp
   }
   return {x.x + d * c, x.y + d * s, wrap_angle(x.theta + u.w_radps * u.dt_s)};
 }
+
+/// A calibrated drive: the commanded (v, w) scaled to the motion they produce, and a process noise
+/// that grows with the motion and with time (white over the interval, so variances add with dt):
+///   v = scale_v v_cmd,  w = scale_w w_cmd
+///   var(v dt) = (alpha_v^2 v^2 + q_v) dt,   var(w dt) = (alpha_w^2 w^2 + alpha_wv^2 v^2 + q_w) dt
+/// alpha_v: slip along the path; alpha_w: error of a turn; alpha_wv: heading drift while driving
+/// straight; q_v, q_w: what a standing robot still does (vibration, the command's latency). The
+/// default is the identity scale with no noise. Fitted to MRCLAM in docs/mrclam.md.
+template <typename T>
+struct OdometryModel {
+  T scale_v = T(1);
+  T scale_w = T(1);
+  T alpha_v_sqrt_s = T(0);      ///< [sqrt(s)]
+  T q_v_m2ps = T(0);            ///< [m^2/s]
+  T alpha_w_sqrt_s = T(0);      ///< [sqrt(s)]
+  T alpha_wv_rad_sqrt_s_pm = T(0);  ///< [rad sqrt(s) / m]
+  T q_w_rad2ps = T(0);          ///< [rad^2/s]
+
+  bool valid() const {
+    const T f[] = {scale_v, scale_w, alpha_v_sqrt_s, q_v_m2ps, alpha_w_sqrt_s, alpha_wv_rad_sqrt_s_pm, q_w_rad2ps};
+    for (const T v : f)  // <= 7
+      if (!std::isfinite(v) || v < T(0)) return false;
+    return true;
+  }
+
+  /// The interval's odometry for the filter: scaled velocities and their standard deviations.
+  /// @param[out] out  written only on kOk (dt = 0 gives zero standard deviations)
+  /// @return kOk; kNonFinite; kInvalidInput for dt < 0 or a model that is not valid().
+  [[nodiscard]] Status odometry(T v_cmd_mps, T w_cmd_radps, T dt_s, Odometry<T>& out) const {
+    if (!std::isfinite(v_cmd_mps) || !std::isfinite(w_cmd_radps) || !std::isfinite(dt_s)) return Status::kNonFinite;
+    if (!(dt_s >= T(0)) || !valid()) return Status::kInvalidInput;
+    const T v = scale_v * v_cmd_mps;
+    const T w = scale_w * w_cmd_radps;
+    T sv = T(0), sw = T(0);
+    if (dt_s > T(0)) {  // std of v = std(v dt) / dt = sqrt(rate / dt)
+      const T aw = alpha_w_sqrt_s * w, awv = alpha_wv_rad_sqrt_s_pm * v, av = alpha_v_sqrt_s * v;
+      sv = std::sqrt((av * av + q_v_m2ps) / dt_s);
+      sw = std::sqrt((aw * aw + awv * awv + q_w_rad2ps) / dt_s);
+    }
+    out = Odometry<T>{v, w, dt_s, sv, sw};
+    return Status::kOk;
+  }
+};
 
 }  // namespace geojcbb::ekf

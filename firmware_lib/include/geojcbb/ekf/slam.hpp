@@ -7,6 +7,11 @@
 //   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
 //   review:         landmark bookkeeping: a new landmark is tentative until it is paired again;
 //                   one that is expected in view and missed too often is removed              O(n^2)
+// First-estimates Jacobians (Huang, Mourikis, Roumeliotis, ICRA 2008; FilterOptions): the
+// measurement Jacobians use each landmark's first estimate, and the first prediction after an
+// update uses the pose before that update, so the filter gains no information along the directions
+// that SLAM cannot observe (global position and heading); the innovations still use the current
+// estimate. Without them the heading's variance shrinks while its error grows (docs/mrclam.md).
 // Landmark ids are stable: augment hands out increasing ids and removal keeps the order, so the id
 // of index j only ever grows with j, and index_of() is a binary search. Predictions, associations
 // and update() speak ids; indices are internal.
@@ -60,22 +65,41 @@ struct Visibility {
 /// Tentative landmarks: a landmark is confirmed once it has been paired `confirm_hits` times (its
 /// first sighting counts). Until then it is removed when it has been expected in view and not
 /// paired `max_misses` times, or when `max_tentative_reviews` reviews have passed (it left the view
-/// unconfirmed). Confirmed landmarks are never removed. This keeps clutter that passed the
-/// augmentation gate out of the map.
+/// unconfirmed). This keeps clutter that passed the augmentation gate out of the map.
+/// Objects that move (another robot) are removed even when confirmed, by two rules (0: off):
+///   miss_probability  expected in view and missed so often in a row that a static landmark seen at
+///                     this landmark's own rate, p = (hits + 1) / (expected + 2), would be missed
+///                     so with a probability below this: (1 - p)^streak < miss_probability;
+///   static_gate_d2    paired, but its estimate has moved further than refining a static point can:
+///                     (l - l0)^T (P0 - P + f I)^-1 (l - l0) > static_gate_d2, with l0 and P0 the
+///                     landmark's position and covariance when it was added, P its covariance now
+///                     (for a static point l - l0 has covariance P0 - P) and f = (1 cm)^2.
 struct LandmarkPolicy {
   int confirm_hits = 2;
   int max_misses = 2;
   int max_tentative_reviews = 10;
+  float miss_probability = 0.0f;
+  float static_gate_d2 = 0.0f;
   bool valid() const {
     return confirm_hits >= 1 && confirm_hits <= 255 && max_misses >= 1 && max_misses <= 255 &&
-           max_tentative_reviews >= 1 && max_tentative_reviews <= 255;
+           max_tentative_reviews >= 1 && max_tentative_reviews <= 255 && miss_probability >= 0.0f &&
+           miss_probability < 1.0f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f;
   }
 };
 
 struct ReviewStats {
   int expected = 0;  ///< landmarks in the prediction that were in view
   int paired = 0;    ///< of those, paired by the association
-  int removed = 0;   ///< tentative landmarks removed
+  int removed = 0;   ///< landmarks removed (every rule)
+  int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
+  int removed_moved = 0;   ///< of those, removed by the static-gate rule
+};
+
+/// How the filter linearises.
+struct FilterOptions {
+  /// First-estimates Jacobians (see the top of this file). Off: every Jacobian at the current
+  /// estimate (the standard EKF).
+  bool first_estimates_jacobians = true;
 };
 
 struct LocalMapStats {
@@ -90,7 +114,7 @@ class Slam {
 
   /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
-  [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) {
+  [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0, const FilterOptions& options = {}) {
     if (!std::isfinite(x0.x) || !std::isfinite(x0.y) || !std::isfinite(x0.theta) || !P0.allFinite()) {
       return Status::kNonFinite;
     }
@@ -105,6 +129,8 @@ class Slam {
     if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
     n_ = 0;
     next_id_ = 0;
+    options_ = options;
+    updated_ = false;
     x_[0] = x0.x;
     x_[1] = x0.y;
     x_[2] = wrap_angle(x0.theta);
@@ -116,7 +142,7 @@ class Slam {
   int landmarks() const { return n_; }
   /// The stable id of landmark index j (0 <= j < landmarks()).
   FeatureId id(int j) const { return id_[j]; }
-  /// Hits so far of landmark index j (saturating at 255), and whether it is confirmed.
+  /// Hits so far of landmark index j (saturating at 65535).
   int hits(int j) const { return hits_[j]; }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   int index_of(FeatureId id) const {
@@ -131,6 +157,12 @@ class Slam {
   int dim() const { return Layout::landmark(n_); }
   Pose2<T> pose() const { return {x_[0], x_[1], x_[2]}; }
   Vec2<T> landmark(int j) const { return Vec2<T>(x_[Layout::landmark(j)], x_[Layout::landmark(j) + 1]); }
+  /// Where the measurement Jacobians of landmark j are evaluated: its first estimate with
+  /// first-estimates Jacobians, else its current estimate.
+  Vec2<T> linearisation_point(int j) const {
+    return options_.first_estimates_jacobians ? Vec2<T>(first_[2 * j], first_[2 * j + 1]) : landmark(j);
+  }
+  const FilterOptions& options() const { return options_; }
   T x(int i) const { return x_[i]; }
   T cov(int r, int c) const { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
 
@@ -145,6 +177,11 @@ class Slam {
     Mat3<T> F;
     Mat32<T> G;
     const Pose2<T> next = move(pose(), u, &F, &G);
+    if (options_.first_estimates_jacobians && updated_) {
+      // FEJ: the displacement from the pose before the last update, not from the updated pose.
+      F(0, 2) -= x_[1] - prior_[1];
+      F(1, 2) += x_[0] - prior_[0];
+    }
     const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
     const Mat3<T> Prr = F * block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
     set_block<3, 3>(0, 0, T(0.5) * (Prr + Prr.transpose()));
@@ -157,6 +194,7 @@ class Slam {
     x_[0] = next.x;
     x_[1] = next.y;
     x_[2] = next.theta;
+    updated_ = false;
     return Status::kOk;
   }
 
@@ -197,7 +235,8 @@ class Slam {
     out.C.resize(2 * n, 2 * n);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
       out.id[a] = id_[idx[a]];
-      out.h[a] = observe(xr, landmark(idx[a]), &Hp[a], &Hl[a]);
+      out.h[a] = observe(xr, landmark(idx[a]));
+      observe(xr, linearisation_point(idx[a]), &Hp[a], &Hl[a]);
     }
     const Mat3<T> Prr = block<3, 3>(0, 0);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
@@ -234,7 +273,8 @@ class Slam {
       if (j < 0) return Status::kInvalidInput;
       if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
       if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
-      const Vec2<T> h = observe(xr, landmark(j), &ws.Hp[p], &ws.Hl[p]);
+      const Vec2<T> h = observe(xr, landmark(j));
+      observe(xr, linearisation_point(j), &ws.Hp[p], &ws.Hl[p]);
       const Vec2<T> nu = innovation(obs.z[i], h);
       ws.nu[2 * p] = nu.x();
       ws.nu[2 * p + 1] = nu.y();
@@ -285,6 +325,11 @@ class Slam {
       }
     }
     // Nothing below can fail: the state changes from here on.
+    if (!updated_) {  // the pose the next prediction linearises at (FEJ)
+      prior_[0] = x_[0];
+      prior_[1] = x_[1];
+      updated_ = true;
+    }
     auto forward = [&](auto&& v) {  // v <- L^-1 v, v indexed 0 .. m-1
       for (int i = 0; i < m; ++i) {  // <= 2 kMaxObservations
         T s = v(i);
@@ -338,12 +383,30 @@ class Slam {
     }
     const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
-    x_[k] = l.x();
-    x_[k + 1] = l.y();
-    id_[n_] = next_id_;
-    hits_[n_] = 1;
-    misses_[n_] = 0;
-    age_[n_] = 0;
+    add_bookkeeping(l);
+    id = next_id_++;
+    ++n_;
+    return Status::kOk;
+  }
+
+  /// Adds a landmark known beforehand (a surveyed map, localisation only): at l with covariance Pll,
+  /// uncorrelated with the rest of the state. It starts with one hit, as augment()'s do.
+  /// @param[out] id  the new landmark's id
+  /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll; kCapacityExceeded. No state changes
+  ///         unless kOk.
+  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
+    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+    if (!is_spd(Pll)) return Status::kNotPositiveDefinite;
+    if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
+    const int k = dim();
+    for (int c = 0; c < k; ++c) {  // <= kMaxState
+      for (int u = 0; u < 2; ++u) {
+        P(k + u, c) = T(0);
+        P(c, k + u) = T(0);
+      }
+    }
+    set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
+    add_bookkeeping(l);
     id = next_id_++;
     ++n_;
     return Status::kOk;
@@ -367,6 +430,7 @@ class Slam {
       return Status::kInvalidInput;
     }
     stats = ReviewStats{};
+    for (int j = 0; j < n_; ++j) drop_[j] = 0;  // <= kMaxLandmarks
     for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       const int j = index_of(pred.id[a]);
       if (j < 0) continue;  // not in this map
@@ -376,11 +440,29 @@ class Slam {
       const bool in_view =
           h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
       stats.expected += in_view;
+      if ((in_view || paired) && expected_[j] < 65535) ++expected_[j];
       if (paired) {
         ++stats.paired;
-        if (hits_[j] < 255) ++hits_[j];
-      } else if (in_view && misses_[j] < 255) {
-        ++misses_[j];
+        if (hits_[j] < 65535) ++hits_[j];
+        miss_p_[j] = T(1);
+        if (policy.static_gate_d2 > 0.0f) {
+          // A static landmark's estimate only refines its first one: l - l0 has covariance
+          // P0 - P (the information gained), floored by kStaticFloor_m2 against a near-singular gain.
+          const int l = Layout::landmark(j);
+          const T a0 = init_cov_[3 * j] - P(l, l) + kStaticFloor_m2, b0 = init_cov_[3 * j + 1] - P(l, l + 1),
+                  c0 = init_cov_[3 * j + 2] - P(l + 1, l + 1) + kStaticFloor_m2;
+          const T det = a0 * c0 - b0 * b0;
+          const T dx = x_[Layout::landmark(j)] - first_[2 * j], dy = x_[Layout::landmark(j) + 1] - first_[2 * j + 1];
+          const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
+          if (det > T(0) && d2 > T(policy.static_gate_d2)) drop_[j] = 2;
+        }
+      } else if (in_view) {
+        if (misses_[j] < 255) ++misses_[j];
+        if (policy.miss_probability > 0.0f) {
+          const T p = (T(hits_[j]) + T(1)) / (T(expected_[j]) + T(2));
+          miss_p_[j] *= T(1) - p;
+          if (hits_[j] >= policy.confirm_hits && miss_p_[j] < T(policy.miss_probability)) drop_[j] = 1;
+        }
       }
     }
     // Compaction in index order: every source index >= its destination, so nothing is overwritten
@@ -388,6 +470,11 @@ class Slam {
     std::int16_t keep[B::kMaxLandmarks];
     int kept = 0;
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+      if (drop_[j] != 0) {
+        stats.removed_missed += drop_[j] == 1;
+        stats.removed_moved += drop_[j] == 2;
+        continue;
+      }
       if (hits_[j] < policy.confirm_hits) {
         if (age_[j] < 255) ++age_[j];
         if (misses_[j] >= policy.max_misses || age_[j] >= policy.max_tentative_reviews) continue;
@@ -405,15 +492,37 @@ class Slam {
     }
     for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
       id_[k] = id_[keep[k]];
+      first_[2 * k] = first_[2 * keep[k]];
+      first_[2 * k + 1] = first_[2 * keep[k] + 1];
       hits_[k] = hits_[keep[k]];
       misses_[k] = misses_[keep[k]];
       age_[k] = age_[keep[k]];
+      expected_[k] = expected_[keep[k]];
+      miss_p_[k] = miss_p_[keep[k]];
+      for (int u = 0; u < 3; ++u) init_cov_[3 * k + u] = init_cov_[3 * keep[k] + u];
     }
     n_ = kept;
     return Status::kOk;
   }
 
  private:
+  /// The state and bookkeeping of landmark index n_ at l, whose covariance rows are already set.
+  void add_bookkeeping(const Vec2<T>& l) {
+    const int k = dim();
+    x_[k] = l.x();
+    x_[k + 1] = l.y();
+    first_[2 * n_] = l.x();
+    first_[2 * n_ + 1] = l.y();
+    id_[n_] = next_id_;
+    hits_[n_] = 1;
+    misses_[n_] = 0;
+    age_[n_] = 0;
+    expected_[n_] = 1;
+    miss_p_[n_] = T(1);
+    init_cov_[3 * n_] = P(k, k);
+    init_cov_[3 * n_ + 1] = P(k, k + 1);
+    init_cov_[3 * n_ + 2] = P(k + 1, k + 1);
+  }
   T& P(int r, int c) { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
   T P(int r, int c) const { return cov(r, c); }
   template <int R, int C>
@@ -430,9 +539,18 @@ class Slam {
   }
 
   static constexpr FeatureId kMaxId = 0x7fffffff;
+  static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
+  std::array<T, 2 * B::kMaxLandmarks> first_{};  ///< each landmark's first estimate (FEJ)
+  T prior_[2] = {T(0), T(0)};  ///< the position before the updates since the last predict (FEJ)
+  bool updated_ = false;       ///< an update since the last predict
+  FilterOptions options_;
   std::array<FeatureId, B::kMaxLandmarks> id_{};
-  std::array<std::uint8_t, B::kMaxLandmarks> hits_{};
+  std::array<std::uint16_t, B::kMaxLandmarks> hits_{};
+  std::array<std::uint16_t, B::kMaxLandmarks> expected_{};  ///< reviews in view or paired
+  std::array<T, B::kMaxLandmarks> miss_p_{};                ///< miss-probability rule's product
+  std::array<T, 3 * B::kMaxLandmarks> init_cov_{};          ///< P_ll when added: xx, xy, yy
+  std::array<std::uint8_t, B::kMaxLandmarks> drop_{};       ///< review scratch: 1 missed, 2 moved
   std::array<std::uint8_t, B::kMaxLandmarks> misses_{};
   std::array<std::uint8_t, B::kMaxLandmarks> age_{};  ///< reviews since augment, while tentative
   FeatureId next_id_ = 0;

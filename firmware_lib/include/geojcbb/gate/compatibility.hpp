@@ -43,6 +43,7 @@ struct CompatibilityTable {
   std::array<std::array<std::int16_t, B::kMaxCandidates>, B::kMaxObservations> cand;
   std::array<std::array<T, B::kMaxCandidates>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
   std::array<T, B::kMaxObservations> nearest_d2;  ///< min d2 over the region, compatible or not
+  std::array<T, B::kMaxObservations> nearest_incompatible_d2;  ///< min d2 over the region's others
   std::array<bool, B::kMaxCandidates> in_region;
 };
 
@@ -60,12 +61,16 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     int n = 0;
     T nearest = std::numeric_limits<T>::infinity();
+    T nearest_out = nearest;
     for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
       if (!table.in_region[j]) continue;
       const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
       const T d2 = mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
       if (d2 < nearest) nearest = d2;
-      if (!(d2 <= cfg.gate.individual)) continue;
+      if (!(d2 <= cfg.gate.individual)) {
+        if (d2 < nearest_out) nearest_out = d2;
+        continue;
+      }
       int k = n++;  // insertion sort by d2, ties by candidate index (stable)
       for (; k > 0 && table.d2[i][k - 1] > d2; --k) {  // <= kMaxCandidates
         table.d2[i][k] = table.d2[i][k - 1];
@@ -76,6 +81,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
     }
     table.count[i] = static_cast<std::int16_t>(n);
     table.nearest_d2[i] = nearest;
+    table.nearest_incompatible_d2[i] = nearest_out;
     diag.compatible_pairs = static_cast<std::uint16_t>(diag.compatible_pairs + n);
   }
 }

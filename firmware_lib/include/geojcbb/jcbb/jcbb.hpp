@@ -5,7 +5,8 @@
 // - Bound: pairings so far + remaining observations that still have a free compatible candidate.
 // - Options: mutual exclusion; optimal criterion (2019 paper, eq. 14: among the most pairings, the
 //   smallest joint d2, pruned with the monotone d2); fewest-candidates-first ordering; node budget
-//   (anytime: the best hypothesis so far and a flag).
+//   (anytime: the best hypothesis so far and a flag); ambiguity margin (also find the runner-up: a
+//   different hypothesis with as many pairings whose joint d2 is within the margin of the best's).
 // Bounds: stack depth <= MaxObservations; nodes <= node_budget <= MaxJcbbNodes; each node O(p^2).
 #pragma once
 
@@ -26,6 +27,17 @@ struct SearchOutcome {
   T joint_d2 = T(0);
   std::uint32_t nodes = 0;
   bool budget_hit = false;
+  /// With an ambiguity margin: the closest other hypothesis with as many pairings (valid when
+  /// have_runner_up), and its joint d2.
+  std::array<std::int16_t, B::kMaxObservations> runner_up;
+  bool have_runner_up = false;
+  T runner_up_d2 = T(0);
+  /// Observations the best and the runner-up pair differently, when the runner-up is within the
+  /// margin; set by jcbb_search.
+  bool ambiguous(int i, T margin) const {
+    return have_runner_up && runner_up_d2 - joint_d2 < margin && runner_up_d2 - joint_d2 > -margin &&
+           runner_up[i] != best[i];
+  }
 };
 
 template <typename T, class B>
@@ -83,6 +95,7 @@ template <typename T, class B>
   const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, subset, ws.order);
   const bool exclusion = cfg.mutual_exclusion;
   const bool optimal = cfg.optimal_criterion;
+  const T margin = cfg.ambiguity_margin;
   const std::uint32_t budget = node_budget;
   ws.joint.clear();
   for (int j = 0; j < pred.count; ++j) ws.used[j] = 0;  // <= kMaxCandidates
@@ -92,6 +105,7 @@ template <typename T, class B>
   }
   out.nodes = 0;
   out.budget_hit = false;
+  out.have_runner_up = false;
   if (prefix != nullptr) {
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const int c = (*prefix)[i];
@@ -121,9 +135,11 @@ template <typename T, class B>
     }
     return n;
   };
-  // Can a subtree reaching at most `bound` pairings, with joint d2 at least `d2`, beat the best?
+  // Can a subtree reaching at most `bound` pairings, with joint d2 at least `d2`, beat the best (or,
+  // with a margin, become the runner-up)?
   auto can_improve = [&](int bound, T d2) {
-    return bound > out.pairings || (optimal && bound == out.pairings && d2 < out.joint_d2);
+    return bound > out.pairings || (optimal && bound == out.pairings && d2 < out.joint_d2) ||
+           (margin > T(0) && bound == out.pairings && d2 < out.joint_d2 + margin);
   };
 
   int k = 0;
@@ -140,9 +156,22 @@ template <typename T, class B>
       const int p = ws.joint.pairs();
       const T d2 = ws.joint.d2();
       if (p > out.pairings || (optimal && p == out.pairings && d2 < out.joint_d2)) {
+        if (margin > T(0)) {  // the replaced best is the runner-up when it has as many pairings
+          out.have_runner_up = p == out.pairings && p > 0;
+          out.runner_up_d2 = out.joint_d2;
+          for (int i = 0; i < obs.count; ++i) out.runner_up[i] = out.best[i];  // <= kMaxObservations
+        }
         out.pairings = p;
         out.joint_d2 = d2;
         for (int i = 0; i < obs.count; ++i) out.best[i] = ws.current[i];  // <= kMaxObservations
+      } else if (margin > T(0) && p == out.pairings && p > 0) {
+        const T gap = d2 > out.joint_d2 ? d2 - out.joint_d2 : out.joint_d2 - d2;
+        const T held = out.runner_up_d2 > out.joint_d2 ? out.runner_up_d2 - out.joint_d2 : out.joint_d2 - out.runner_up_d2;
+        if (!out.have_runner_up || gap < held) {
+          out.have_runner_up = true;
+          out.runner_up_d2 = d2;
+          for (int i = 0; i < obs.count; ++i) out.runner_up[i] = ws.current[i];  // <= kMaxObservations
+        }
       }
     } else {
       const int i = ws.order[k];

@@ -26,13 +26,17 @@ struct StepSettings {
   double new_landmark_level = 0.999;  ///< chi-square level of the augmentation gate
   ekf::Visibility<T> view;            ///< where a mapped landmark is expected (for review)
   ekf::LandmarkPolicy policy;
+  ekf::FilterOptions filter;          ///< how the filter linearises (applied at the next reset)
+  /// Off: observations with no compatible candidate never become landmarks (a known, fixed map:
+  /// localisation only); they are reported kNewDropped.
+  bool augment = true;
 };
 
 /// Per observation of a scan, what became of it.
 enum class Outcome : std::uint8_t {
   kPaired = 0,     ///< feature: the map landmark's id
   kNewLandmark,    ///< no compatible candidate; became the landmark `feature`
-  kNewDropped,     ///< no compatible candidate, but inside the augmentation gate: dropped
+  kNewDropped,     ///< no compatible candidate, but inside the augmentation gate (or augmentation off): dropped
   kUnmatched,      ///< compatible candidates, left unpaired by the search (ambiguous)
   kNotAugmented,   ///< would have become a landmark, but the map is full
 };
@@ -81,6 +85,8 @@ class SlamStep {
     gate_ = static_cast<T>(gate);
     view_ = s.view;
     policy_ = s.policy;
+    filter_ = s.filter;
+    augment_ = s.augment;
     configured_ = true;
     return Status::kOk;
   }
@@ -89,7 +95,12 @@ class SlamStep {
   const ekf::Slam<T, B>& slam() const { return slam_; }
 
   /// @return the statuses of ekf::Slam::reset.
-  [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) { return slam_.reset(x0, P0); }
+  [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) { return slam_.reset(x0, P0, filter_); }
+
+  /// A landmark known beforehand (ekf::Slam::add_known_landmark), after reset().
+  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
+    return slam_.add_known_landmark(l, Pll, id);
+  }
 
   /// @return the statuses of ekf::Slam::predict.
   [[nodiscard]] Status predict(const ekf::Odometry<T>& u) { return slam_.predict(u); }
@@ -150,7 +161,7 @@ class SlamStep {
         out.outcome[i] = Outcome::kPaired;
       } else if (f == kUnmatched) {
         out.outcome[i] = Outcome::kUnmatched;
-      } else if (!(assoc.d2[i] > gate_)) {
+      } else if (!augment_ || !(assoc.d2[i] > gate_)) {
         out.outcome[i] = Outcome::kNewDropped;
       } else {
         FeatureId id = -1;
@@ -184,6 +195,8 @@ class SlamStep {
   T gate_ = T(0);
   ekf::Visibility<T> view_;
   ekf::LandmarkPolicy policy_;
+  ekf::FilterOptions filter_;
+  bool augment_ = true;
   bool configured_ = false;
 };
 

@@ -32,6 +32,8 @@ struct ReportRow {
          anees_hi = NAN;     ///< time-averaged NEES and its 95 % bounds
   double nees_inside = NAN;  ///< fraction of scans whose run-averaged NEES is
                              ///< inside its 95 % bounds
+  int fp_clutter = 0;        ///< FP that paired clutter (sum over the runs)
+  double duplicates = NAN;   ///< map landmarks beyond one per true landmark, at the end, mean over runs
 };
 
 inline double accuracy(const Score& s) {

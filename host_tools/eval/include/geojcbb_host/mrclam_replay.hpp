@@ -23,11 +23,15 @@
 #include <vector>
 
 #include "geojcbb_host/mrclam.hpp"
+#include "geojcbb_host/mrclam_calibration.hpp"
 #include "geojcbb_host/slam_run.hpp"
 
 namespace geojcbb::host {
 
 constexpr double kHoldLimit_s = 0.25;
+/// With the calibrated drive, a gap in the log is driven through with the held command; this is the
+/// std of the motion over the gap's rest as a fraction of that motion (docs/mrclam.md).
+constexpr double kGapMotionStd = 0.2;
 /// MRCLAM's landmarks stand in clusters of two or three, 0.13 - 0.28 m apart:
 /// at the camera's range noise geometry cannot tell them apart. Landmarks
 /// within this distance form a group for the group-level score
@@ -51,6 +55,20 @@ struct MrclamNoise {
                                double inflation);
 };
 
+/// The model the filter assumes on a robot's log: the constant noise of MrclamNoise, or parts of
+/// the robot's calibration (mrclam_calibration.hpp), each switchable so its contribution can be
+/// measured alone (docs/mrclam.md):
+///   camera  z corrected for the range and bearing bias, R = diag((s_r0 + k_r r)^2, s_b^2) x inflation^2
+///   drive   commands delayed by the latency and scaled; process noise of ekf::OdometryModel
+///           x inflation^2; a log gap is driven through with the held command (kGapMotionStd)
+struct MrclamModel {
+  MrclamNoise noise;  ///< where a part below is off
+  bool camera = false;
+  bool drive = false;
+  double inflation = 1.0;  ///< on the calibrated standard deviations
+  mrclam::RobotCalibration calibration;  ///< of this robot
+};
+
 /// The camera as the filter knows it (README: range 0.9 - 9.3 m, bearing within
 /// about +-0.6 rad).
 SensorModel mrclam_sensor(const MrclamNoise& n);
@@ -60,7 +78,7 @@ SensorModel mrclam_sensor(const MrclamNoise& n);
 /// Throws std::runtime_error for a log without odometry or ground truth.
 class MrclamSource : public RecordedSource {
  public:
-  MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamNoise& noise,
+  MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamModel& model,
                bool drop_other_robots = false);
 };
 
@@ -68,10 +86,13 @@ class MrclamSource : public RecordedSource {
 /// drop_other_robots: measurements of robots (subjects 1-5) are removed before
 /// association instead of being fed as clutter.
 RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& options,
-                       const MrclamNoise& noise, bool drop_other_robots = false);
+                       const MrclamModel& model, bool drop_other_robots = false);
 
 struct MrclamOptions {
   std::string data_dir;  ///< empty: mrclam::default_data_dir()
+  /// Non-empty: one CSV per replay in this folder (trace_<dataset>_<robot>_<strategy>.csv: per scan
+  /// the pose error, its variances, NEES, pairings and their NIS).
+  std::string trace_dir;
   std::vector<int> datasets{6, 7};
   std::vector<int> robots{1, 2, 3, 4, 5};
   std::vector<Method> strategies;
@@ -81,6 +102,14 @@ struct MrclamOptions {
   double noise_inflation = 1.5;                     ///< on the data's robust spreads (their tails are heavy)
   int jobs = 0;                                     ///< worker threads (0: the number of cores)
   bool drop_other_robots = false;                   ///< see replay_robot
+  bool known_map = false;                           ///< the surveyed landmarks as a fixed map (localisation only)
+  bool camera = true;                               ///< MrclamModel::camera
+  bool drive = true;                                ///< MrclamModel::drive
+  double model_inflation = 1.2;                     ///< MrclamModel::inflation
+  /// Where each robot's calibration is fitted: "cross" (the same robot in the other dataset, 6 <-> 7;
+  /// nothing scored is used to fit) or "same" (the log that is replayed).
+  std::string calibration = "cross";
+  mrclam::CalibrationOptions calibration_options;
   /// Runs each replay's inputs (empty: in process, run_inputs); a device over the link needs jobs = 1.
   RunInputsFn runner;
 };

@@ -40,6 +40,14 @@ struct RunOptions {
   int node_budget = 0;  ///< JCBB nodes per scan (0: the capacity's MaxJcbbNodes)
   int max_steps = 0;                    ///< stop after this many control intervals (0: the whole path)
   ekf::LandmarkPolicy landmark_policy;  ///< tentative landmarks (confirm / remove)
+  ekf::FilterOptions filter;            ///< linearisation (first-estimates Jacobians)
+  double ambiguity_margin = 0;          ///< AssociationConfig::ambiguity_margin (0: off)
+  bool new_if_candidates_taken = false; ///< AssociationConfig::new_if_candidates_taken
+  double static_gate_level = 0;         ///< chi-square level of LandmarkPolicy::static_gate_d2 (0: off)
+  /// Known-map mode (localisation only): these true landmarks (index = truth) are the map from the
+  /// start, with std known_map_sigma_m, and nothing is added or removed. Empty: SLAM.
+  std::vector<Eigen::Vector2d> known_map;
+  double known_map_sigma_m = 0.01;
   double view_margin_m = 1.0;           ///< a landmark within this of the range limits is not expected
   /// Optional: true landmark -> group, for RunResult::group_score (landmarks
   /// too close together for geometry to tell apart share a group). Empty:
@@ -71,6 +79,9 @@ struct StepRecord {
   Pose2<double> truth, estimate;
   double var_x, var_y;  ///< pose variances [m^2]
   double pose_nees;     ///< (x, y, theta) NEES
+  double var_theta = 0;  ///< heading variance [rad^2]
+  int paired = 0;        ///< pairings of the scan
+  double nis_sum = 0;    ///< sum of their individual NIS (d2, 2 dof each)
 };
 
 struct RunResult {
@@ -79,6 +90,7 @@ struct RunResult {
                       ///< landmark is in the same group
   int scans = 0;
   int observations = 0;                ///< scored observations (= TP + TN + FP + FN)
+  int fp_clutter = 0;                  ///< of the FP, clutter (other robots, false detections) paired
   int landmarks = 0;                   ///< mapped at the end
   int spurious_landmarks = 0;          ///< augmented from clutter (over the run)
   int spurious_in_map = 0;             ///< made from clutter and still mapped at the end
@@ -123,6 +135,8 @@ class RunScorer {
   std::size_t ids() const { return feature_truth_.size(); }
   /// The pose estimate at a scan against the truth; P over (x, y, theta).
   void pose(double t_s, const Pose2<double>& truth, const Pose2<double>& estimate, const Eigen::Matrix3d& P);
+  /// The scan just recorded by pose(): its pairings and the sum of their NIS.
+  void nis(int paired, double nis_sum);
   RunResult& result() { return res_; }
   /// The result with mean_abs_x_m / mean_abs_y_m divided by the scans with a true pose.
   RunResult finish() const;
@@ -139,8 +153,7 @@ class RunScorer {
 struct RunInput {
   bool scan = false;
   double v_mps = 0, w_radps = 0, dt_s = 0, sigma_v_mps = 0, sigma_w_radps = 0;  ///< prediction
-  std::vector<SimObservation> observations;         ///< scan: (range, bearing), each with its truth
-  Eigen::Matrix2d R = Eigen::Matrix2d::Identity();  ///< scan: every observation's covariance
+  std::vector<SimObservation> observations;         ///< scan: (range, bearing), each with its truth and R
   double t_s = 0;                                   ///< scan time
   bool have_truth = false;                          ///< true_pose is known
   Pose2<double> true_pose{};
@@ -221,7 +234,7 @@ class SlamSession {
   /// One scan; each observation's truth is a landmark index < true_landmarks,
   /// or -1 for clutter. `truth` is the true pose at the scan, for the pose
   /// error and NEES (nullptr: not recorded).
-  void scan(std::vector<SimObservation> observations, const Eigen::Matrix2d& R, double t_s, const Pose2<double>* truth);
+  void scan(std::vector<SimObservation> observations, double t_s, const Pose2<double>* truth);
   Pose2<double> pose() const;
   /// The result so far; finish() adds the final map and the means.
   RunResult finish();

@@ -37,12 +37,11 @@ proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0);
 proto::Reset link_reset(const Scenario& sc);
 proto::Odometry link_odometry(const RunInput& prediction);
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step);
-/// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with covariance
-/// R; `kept` receives their truths.
-LinkObsBatch link_batch(const std::vector<SimObservation>& scan, const Eigen::Matrix2d& R, std::uint32_t batch_id,
-                        std::size_t max_obs, std::vector<int>& kept);
-LinkObsBatch link_batch(const Scenario& sc, const std::vector<SimObservation>& scan, std::uint32_t batch_id,
+/// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with its
+/// covariance; `kept` receives their truths.
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::size_t max_obs,
                         std::vector<int>& kept);
+LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::vector<int>& kept);
 
 /// What the streaming needs of a link. LinkClient fails on the first fault; LinkSession recovers,
 /// and throws LinkError kRestart when the run must start again from its first input.

@@ -101,6 +101,9 @@ struct ResidualStats {
   double robust_std = 0;     ///< 1.4826 x median absolute deviation: the std if the core is Gaussian
 };
 
+/// Mean, std and robust std of a sample (all 0 when empty).
+ResidualStats residual_stats(std::vector<double> x);
+
 /// Residuals z - h(truth) of every landmark measurement: range and bearing predicted from the
 /// ground-truth pose interpolated at the measurement's time and the landmark's surveyed position.
 struct MeasurementNoise {

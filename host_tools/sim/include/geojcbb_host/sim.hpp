@@ -49,6 +49,7 @@ Scenario load_scenario(const std::string& path);
 struct SimObservation {
   Eigen::Vector2d z;  ///< (range [m], bearing [rad])
   int truth;          ///< landmark index, or -1 for clutter
+  Eigen::Matrix2d R;  ///< the covariance the filter assumes for z (range, bearing)
 };
 
 struct SimStep {
