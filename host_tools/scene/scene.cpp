@@ -61,17 +61,7 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   s.est_pose = {s.true_pose.x + e[0], s.true_pose.y + e[1], wrap_angle(s.true_pose.theta + e[2])};
   for (int j = 0; j < n; ++j) s.est_landmarks.push_back(s.true_landmarks[j] + e.segment<2>(3 + 2 * j));
 
-  // Predictions and C = H P H^T, H = [J_z_pose | 0 .. J_z_landmark_j .. 0].
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * n, dim);
-  for (int j = 0; j < n; ++j) {
-    Mat23<double> Jp;
-    Mat2<double> Jl;
-    s.h.push_back(observe(s.est_pose, Vec2<double>(s.est_landmarks[j]), &Jp, &Jl));
-    H.block<2, 3>(2 * j, 0) = Jp;
-    H.block<2, 2>(2 * j, 3 + 2 * j) = Jl;
-  }
-  s.C = H * s.P * H.transpose();
-  s.C = (0.5 * (s.C + s.C.transpose())).eval();  // eval: the transpose aliases s.C
+  predict_measurements(s);
 
   // Observations: distinct landmarks in random order, then clutter; shuffled.
   s.R = Eigen::Vector2d(p.sigma_range_m * p.sigma_range_m, p.sigma_bearing_rad * p.sigma_bearing_rad)
@@ -101,6 +91,22 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
     s.z.push_back(z);
   }
   return s;
+}
+
+void predict_measurements(Scene& s) {
+  // C = H P H^T, H = [J_z_pose | 0 .. J_z_landmark_j .. 0].
+  const int n = static_cast<int>(s.est_landmarks.size());
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * n, 3 + 2 * n);
+  s.h.clear();
+  for (int j = 0; j < n; ++j) {
+    Mat23<double> Jp;
+    Mat2<double> Jl;
+    s.h.push_back(observe(s.est_pose, Vec2<double>(s.est_landmarks[j]), &Jp, &Jl));
+    H.block<2, 3>(2 * j, 0) = Jp;
+    H.block<2, 2>(2 * j, 3 + 2 * j) = Jl;
+  }
+  s.C = H * s.P * H.transpose();
+  s.C = (0.5 * (s.C + s.C.transpose())).eval();  // eval: the transpose aliases s.C
 }
 
 Score score(const Scene& s, const std::vector<int>& hypothesis) {

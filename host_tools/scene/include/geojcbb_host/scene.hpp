@@ -51,6 +51,10 @@ struct Scene {
 /// Generates one scene; deterministic for a seed.
 Scene make_scene(const SceneParams& p, std::uint64_t seed);
 
+/// Recomputes s.h and s.C = H P H^T from s.est_pose, s.est_landmarks and s.P (make_scene calls it;
+/// a test that moves the estimate calls it again).
+void predict_measurements(Scene& s);
+
 /// Copies a scene into the fixed-capacity inputs of the association core.
 /// @return false when the scene exceeds the capacity B.
 template <typename T, class B>
