@@ -4,6 +4,7 @@
 // allocation; float and double agree on well-conditioned scenes.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -395,4 +396,56 @@ TEST_CASE("consistency: float and double agree on well-conditioned scenes") {
   }
   MESSAGE("float = double on " << compared << " scenes; " << skipped << " skipped (" << truncated << " truncated)");
   CHECK(compared >= 90);
+}
+
+TEST_CASE("consistency: graph and search sizes on generated scenes (reported for docs/consistency.md)") {
+  MESSAGE("sizeof ConsistencyWorkspace<float, DefaultBounds> = " << sizeof(ConsistencyWorkspace<float, B>)
+                                                                 << " B (graph " << sizeof(BitsetGraph<64>)
+                                                                 << " B, search "
+                                                                 << sizeof(ConsistencyWorkspace<float, B>::search)
+                                                                 << " B)");
+  struct Setting {
+    const char* name;
+    int m, n;
+  };
+  for (const Setting& st : {Setting{"8 observations, 8 candidates", 8, 8},
+                            Setting{"12 observations, 16 candidates", 12, 16},
+                            Setting{"16 observations, 24 candidates", 16, 24}}) {
+    for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
+      std::vector<int> nodes, edges, search, wrong, size, true_pairs;
+      int truncated = 0, with_wrong = 0, smaller = 0;
+      for (std::uint64_t seed = 1; seed <= 300; ++seed) {
+        // Large pose error (loop closure, relocalisation): 2 m and 0.5 rad, with a covariance that
+        // admits it.
+        const host::Scene s = host::make_scene(params(st.m, st.n, 2.0, 0.5), seed);
+        auto r = make_run<float>(s, gate);
+        REQUIRE(solve(*r) == Status::kOk);
+        REQUIRE_FALSE(r->out.diag.budget_hit);
+        check_hypothesis_is_clique(*r);
+        nodes.push_back(r->out.diag.graph_nodes);
+        edges.push_back(r->out.diag.graph_edges);
+        search.push_back(static_cast<int>(r->out.diag.search_nodes));
+        size.push_back(r->out.pairings);
+        int ok = 0, real = 0;
+        for (int i = 0; i < r->obs.count; ++i) {
+          ok += r->out.candidate[i] >= 0 && r->out.candidate[i] == s.truth[i];
+          real += s.truth[i] >= 0;
+        }
+        wrong.push_back(r->out.pairings - ok);
+        true_pairs.push_back(real);
+        with_wrong += r->out.pairings > ok;
+        smaller += ok < real;
+        truncated += r->out.diag.nodes_truncated;
+      }
+      auto med = [](std::vector<int> v) {
+        std::sort(v.begin(), v.end());
+        return std::to_string(v[v.size() / 2]) + " (max " + std::to_string(v.back()) + ")";
+      };
+      MESSAGE(std::string(st.name) << ", " << std::string(gate == PairingGate::kWide ? "wide gate" : "every candidate")
+                      << ", 300 scenes: graph nodes " << med(nodes) << ", truncated " << truncated << "; edges "
+                      << med(edges) << "; search nodes " << med(search) << "; clique " << med(size)
+                      << " for true pairings " << med(true_pairs) << "; scenes with a wrong pairing " << with_wrong
+                      << ", missing a true one " << smaller);
+    }
+  }
 }
