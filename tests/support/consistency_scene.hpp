@@ -12,6 +12,20 @@
 
 namespace geojcbb::test {
 
+/// Scene parameters of the consistency tests: 20 % clutter, 10 m range, landmarks >= 1 m apart, and
+/// the given pose uncertainty (large values: loop closure, relocalisation).
+inline host::SceneParams consistency_scene_params(int m, int n, double sigma_pose_xy_m, double sigma_pose_theta_rad) {
+  host::SceneParams p;
+  p.observations = m;
+  p.landmarks = n;
+  p.clutter_fraction = 0.2;
+  p.max_range_m = 10;
+  p.min_separation_m = 1.0;
+  p.sigma_pose_xy_m = sigma_pose_xy_m;
+  p.sigma_pose_theta_rad = sigma_pose_theta_rad;
+  return p;
+}
+
 /// The scene with its world rotated by phi and translated by t (poses, landmarks, P); h and C
 /// recomputed. The measurements z are relative to the robot and stay as they are.
 inline host::Scene rigidly_moved(const host::Scene& s, double phi, const Eigen::Vector2d& t) {

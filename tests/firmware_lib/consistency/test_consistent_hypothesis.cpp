@@ -47,18 +47,6 @@ Status solve(Run<T>& r) {
   return consistent_hypothesis(r.obs, r.pred, r.opt, r.ws, r.out);
 }
 
-host::SceneParams params(int m, int n, double sigma_pose_xy, double sigma_pose_theta) {
-  host::SceneParams p;
-  p.observations = m;
-  p.landmarks = n;
-  p.clutter_fraction = 0.2;
-  p.max_range_m = 10;
-  p.min_separation_m = 1.0;
-  p.sigma_pose_xy_m = sigma_pose_xy;
-  p.sigma_pose_theta_rad = sigma_pose_theta;
-  return p;
-}
-
 /// The hypothesis is a matching (one candidate per observation, one observation per candidate), its
 /// pairings are graph nodes and pairwise adjacent, and its size is the reported clique.
 template <typename T>
@@ -122,7 +110,7 @@ host::Scene wrong_pose_scene() {
 TEST_CASE_TEMPLATE("consistency: the hypothesis is invariant to a rigid motion of the world", T, float, double) {
   int compared = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(params(10, 14, 1.0, 0.3), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 14, 1.0, 0.3), seed);
     for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
       auto r0 = make_run<T>(s, gate);
       REQUIRE(solve(*r0) == Status::kOk);
@@ -217,7 +205,7 @@ TEST_CASE_TEMPLATE("consistency: the budget is respected and flagged; the best s
                    double) {
   int flagged = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(params(16, 20, 2.0, 0.5), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(16, 20, 2.0, 0.5), seed);
     auto r = make_run<T>(s, PairingGate::kEveryCandidate);
     REQUIRE(solve(*r) == Status::kOk);
     const std::uint32_t full = r->out.diag.search_nodes;
@@ -238,7 +226,7 @@ TEST_CASE_TEMPLATE("consistency: the budget is respected and flagged; the best s
 }
 
 TEST_CASE_TEMPLATE("consistency: bad input returns a status and leaves the result untouched", T, float, double) {
-  const host::Scene s = host::make_scene(params(8, 10, 0.5, 0.05), 3);
+  const host::Scene s = host::make_scene(consistency_scene_params(8, 10, 0.5, 0.05), 3);
   auto r = make_run<T>(s, PairingGate::kWide);
   auto expect = [&](Status want) {
     ConsistencyResult<B> sentinel;
@@ -316,7 +304,7 @@ TEST_CASE_TEMPLATE("consistency: bad input returns a status and leaves the resul
 }
 
 TEST_CASE_TEMPLATE("consistency: an empty scan and an empty map give an empty hypothesis", T, float, double) {
-  const host::Scene s = host::make_scene(params(8, 10, 0.5, 0.05), 4);
+  const host::Scene s = host::make_scene(consistency_scene_params(8, 10, 0.5, 0.05), 4);
   auto r = make_run<T>(s, PairingGate::kWide);
   r->obs.count = 0;
   REQUIRE(solve(*r) == Status::kOk);
@@ -333,7 +321,7 @@ TEST_CASE_TEMPLATE("consistency: an empty scan and an empty map give an empty hy
 
 TEST_CASE_TEMPLATE("consistent_hypothesis() allocates nothing", T, float, double) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    const host::Scene s = host::make_scene(params(20, 30, 1.0, 0.2), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(20, 30, 1.0, 0.2), seed);
     for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
       auto r = make_run<T>(s, gate);
       r->opt.local_region = seed % 2 == 0;
@@ -356,7 +344,7 @@ TEST_CASE("consistency: float and double agree on well-conditioned scenes") {
   // against its gate) lies within 1e-3 of its threshold, computed in double.
   int compared = 0, skipped = 0, truncated = 0;
   for (std::uint64_t seed = 1; seed <= 60; ++seed) {
-    const host::Scene s = host::make_scene(params(8, 8, 1.0, 0.2), seed);  // <= 64 pairings
+    const host::Scene s = host::make_scene(consistency_scene_params(8, 8, 1.0, 0.2), seed);  // <= 64 pairings
     for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
       auto rd = make_run<double>(s, gate);
       auto rf = make_run<float>(s, gate);
@@ -417,7 +405,7 @@ TEST_CASE("consistency: graph and search sizes on generated scenes (reported for
       for (std::uint64_t seed = 1; seed <= 300; ++seed) {
         // Large pose error (loop closure, relocalisation): 2 m and 0.5 rad, with a covariance that
         // admits it.
-        const host::Scene s = host::make_scene(params(st.m, st.n, 2.0, 0.5), seed);
+        const host::Scene s = host::make_scene(consistency_scene_params(st.m, st.n, 2.0, 0.5), seed);
         auto r = make_run<float>(s, gate);
         REQUIRE(solve(*r) == Status::kOk);
         REQUIRE_FALSE(r->out.diag.budget_hit);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <random>
 #include <string>
@@ -228,41 +229,40 @@ TEST_CASE("max clique: bitset graph basics") {
   CHECK_FALSE(big.test(65));
 }
 
-TEST_CASE("max clique equals brute force on thousands of random graphs (<= 20 nodes)") {
-  std::mt19937_64 rng(20240612);
+namespace {
+/// The search against an oracle on `per_density` random graphs per density, of min_n..max_n nodes.
+/// Returns the number of graphs checked.
+template <class Oracle>
+int check_random_graphs(std::uint64_t seed, std::initializer_list<double> densities, int min_n, int max_n,
+                        int per_density, Oracle oracle) {
+  std::mt19937_64 rng(seed);
   int graphs = 0;
-  for (const double density : {0.1, 0.3, 0.5, 0.7, 0.9, 0.97}) {
+  for (const double density : densities) {
     CAPTURE(density);
-    std::uniform_int_distribution<int> size(0, 20);
-    for (int k = 0; k < 600; ++k) {
+    std::uniform_int_distribution<int> size(min_n, max_n);
+    for (int k = 0; k < per_density; ++k) {
       const Graph g = random_graph(size(rng), density, rng);
       CAPTURE(g.count);
       const CliqueResult<64> r = solve(g);
       REQUIRE_FALSE(r.budget_hit);
       REQUIRE_FALSE(r.depth_capped);
-      REQUIRE(r.size == brute_force_clique_number(g));
+      REQUIRE(r.size == oracle(g));
       REQUIRE(r.members.count() == r.size);
       REQUIRE(g.is_clique(r.members));
       ++graphs;
     }
   }
-  CHECK(graphs == 3600);
+  return graphs;
+}
+}  // namespace
+
+TEST_CASE("max clique equals brute force on thousands of random graphs (<= 20 nodes)") {
+  CHECK(check_random_graphs(20240612, {0.1, 0.3, 0.5, 0.7, 0.9, 0.97}, 0, 20, 600, brute_force_clique_number) ==
+        3600);
 }
 
 TEST_CASE("max clique equals Bron-Kerbosch on random graphs of 21..64 nodes") {
-  std::mt19937_64 rng(77);
-  for (const double density : {0.2, 0.5, 0.8, 0.9}) {
-    CAPTURE(density);
-    std::uniform_int_distribution<int> size(21, 64);
-    for (int k = 0; k < 60; ++k) {
-      const Graph g = random_graph(size(rng), density, rng);
-      CAPTURE(g.count);
-      const CliqueResult<64> r = solve(g);
-      REQUIRE_FALSE(r.budget_hit);
-      REQUIRE(r.size == oracle_clique_number(g));
-      REQUIRE(g.is_clique(r.members));
-    }
-  }
+  CHECK(check_random_graphs(77, {0.2, 0.5, 0.8, 0.9}, 21, 64, 60, oracle_clique_number) == 240);
 }
 
 TEST_CASE("max clique on known hard graphs (DIMACS-style families, <= 64 nodes)") {

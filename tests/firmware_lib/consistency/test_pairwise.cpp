@@ -22,18 +22,6 @@ namespace {
 
 using B = DefaultBounds;
 
-host::SceneParams params(int m, int n, double sigma_pose_xy, double sigma_pose_theta) {
-  host::SceneParams p;
-  p.observations = m;
-  p.landmarks = n;
-  p.clutter_fraction = 0.2;
-  p.max_range_m = 10;
-  p.min_separation_m = 1.0;
-  p.sigma_pose_xy_m = sigma_pose_xy;
-  p.sigma_pose_theta_rad = sigma_pose_theta;
-  return p;
-}
-
 template <typename T>
 struct Inputs {
   Observations<T, B> obs;
@@ -56,6 +44,24 @@ double rounding_scale(const host::Scene& s, int a, int b) {
   return 256.0 * std::numeric_limits<T>::epsilon() * (tr(a) + tr(b));
 }
 
+/// select_pairings() with a cap of Cap nodes keeps the Cap smallest (d2, i, a) of `all` (every pairing
+/// through the gate, sorted), listed by (i, a).
+template <int Cap, typename T>
+void check_selection(const Inputs<T>& in, const ConsistencyOptions<T>& opt,
+                     const std::vector<std::tuple<T, int, int>>& all) {
+  auto list = std::make_unique<PairingList<T, Cap>>();
+  select_pairings(in.obs, in.pred, opt, *list);
+  const int keep = std::min<int>(Cap, static_cast<int>(all.size()));
+  CHECK(list->offered == static_cast<int>(all.size()));
+  CHECK(list->truncated == (static_cast<int>(all.size()) > Cap));
+  REQUIRE(list->count == keep);
+  std::vector<std::tuple<int, int>> want, got;
+  for (int x = 0; x < keep; ++x) want.emplace_back(std::get<1>(all[x]), std::get<2>(all[x]));
+  for (int x = 0; x < list->count; ++x) got.emplace_back(list->node[x].obs, list->node[x].cand);
+  std::sort(want.begin(), want.end());
+  CHECK(got == want);
+}
+
 }  // namespace
 
 TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle computed from P", T, float,
@@ -63,7 +69,7 @@ TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle 
   const double eps = std::numeric_limits<T>::epsilon();
   int compared = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(params(10, 16, 0.5 * seed, 0.05 * seed), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 16, 0.5 * seed, 0.05 * seed), seed);
     auto in = load<T>(s);
     for (int i = 0; i < in->obs.count; ++i) {
       for (int k = i + 1; k < in->obs.count; ++k) {
@@ -92,22 +98,13 @@ TEST_CASE_TEMPLATE("consistency: the pair statistic is pose-free (estimate, pose
                    T, float, double) {
   const double eps = std::numeric_limits<T>::epsilon();
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    const host::Scene s = host::make_scene(params(8, 12, 0.3, 0.03), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(8, 12, 0.3, 0.03), seed);
     host::Scene moved = s;
     // A badly wrong estimate, a large pose covariance, and a large common rigid error of the whole
     // state (the robot and every landmark translated together and rotated about the origin).
     moved.est_pose = {s.est_pose.x + 3.0, s.est_pose.y - 2.0, wrap_angle(s.est_pose.theta + 1.2)};
     const int n = static_cast<int>(s.est_landmarks.size());
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 + 2 * n, 3);
-    auto rigid = [&](int row, const Eigen::Vector2d& at) {
-      A(row, 0) = 1;
-      A(row + 1, 1) = 1;
-      A(row, 2) = -at.y();
-      A(row + 1, 2) = at.x();
-    };
-    rigid(0, Eigen::Vector2d(s.est_pose.x, s.est_pose.y));
-    A(2, 2) = 1;
-    for (int j = 0; j < n; ++j) rigid(3 + 2 * j, s.est_landmarks[j]);
+    const Eigen::MatrixXd A = host::rigid_motion_jacobian(s.est_pose, s.est_landmarks);
     moved.P = s.P + A * Eigen::Vector3d(4.0, 4.0, 0.25).asDiagonal() * A.transpose();
     moved.P.topLeftCorner<3, 3>() += Eigen::Vector3d(9.0, 9.0, 0.5).asDiagonal();
     host::predict_measurements(moved);
@@ -141,7 +138,7 @@ TEST_CASE("consistency: the distance test is calibrated on true pairings (chi-sq
   double sum = 0;
   int pairs = 0, passed = 0;
   for (std::uint64_t seed = 1; seed <= 400; ++seed) {
-    host::SceneParams p = params(10, 14, 1.0, 0.2);
+    host::SceneParams p = consistency_scene_params(10, 14, 1.0, 0.2);
     p.clutter_fraction = 0;
     const host::Scene s = host::make_scene(p, seed);
     auto in = load<double>(s);
@@ -167,7 +164,7 @@ TEST_CASE("consistency: the distance test is calibrated on true pairings (chi-sq
 TEST_CASE_TEMPLATE("consistency: graph nodes from the wide gate, capped at MaxNodes by best d2", T, float,
                    double) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(params(12, 20, 1.0, 0.1), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(12, 20, 1.0, 0.1), seed);
     auto in = load<T>(s);
     for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
       ConsistencyOptions<T> opt;
@@ -187,33 +184,8 @@ TEST_CASE_TEMPLATE("consistency: graph nodes from the wide gate, capped at MaxNo
         }
       }
       std::sort(all.begin(), all.end());
-      for (const int cap_test : {0, 1}) {
-        // The default 64 nodes, and a list of 8 nodes that truncates more often.
-        if (cap_test == 0) {
-          auto list = std::make_unique<PairingList<T, 64>>();
-          select_pairings(in->obs, in->pred, opt, *list);
-          const int keep = std::min<int>(64, static_cast<int>(all.size()));
-          CHECK(list->offered == static_cast<int>(all.size()));
-          CHECK(list->truncated == (all.size() > 64));
-          REQUIRE(list->count == keep);
-          std::vector<std::tuple<int, int>> want, got;
-          for (int x = 0; x < keep; ++x) want.emplace_back(std::get<1>(all[x]), std::get<2>(all[x]));
-          for (int x = 0; x < list->count; ++x) got.emplace_back(list->node[x].obs, list->node[x].cand);
-          std::sort(want.begin(), want.end());
-          CHECK(got == want);  // the smallest d2, listed by (i, a)
-        } else {
-          auto list = std::make_unique<PairingList<T, 8>>();
-          select_pairings(in->obs, in->pred, opt, *list);
-          const int keep = std::min<int>(8, static_cast<int>(all.size()));
-          CHECK(list->truncated == (all.size() > 8));
-          REQUIRE(list->count == keep);
-          std::vector<std::tuple<int, int>> want, got;
-          for (int x = 0; x < keep; ++x) want.emplace_back(std::get<1>(all[x]), std::get<2>(all[x]));
-          for (int x = 0; x < list->count; ++x) got.emplace_back(list->node[x].obs, list->node[x].cand);
-          std::sort(want.begin(), want.end());
-          CHECK(got == want);
-        }
-      }
+      check_selection<64>(*in, opt, all);  // the default
+      check_selection<8>(*in, opt, all);   // truncates more often
     }
   }
 }
@@ -222,7 +194,7 @@ TEST_CASE_TEMPLATE("consistency: graph edges are the oracle's consistent pairs",
   const double margin = std::is_same<T, float>::value ? 1e-3 : 1e-9;
   int edges = 0, borderline = 0;
   for (std::uint64_t seed = 1; seed <= 30; ++seed) {
-    const host::Scene s = host::make_scene(params(10, 14, 1.0, 0.2), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 14, 1.0, 0.2), seed);
     auto in = load<T>(s);
     ConsistencyOptions<T> opt;
     REQUIRE(opt.set_confidence(0.99999, 0.999) == Status::kOk);

@@ -48,6 +48,10 @@ struct Scene {
   Eigen::MatrixXd C;                            ///< 2N x 2N  H P H^T
 };
 
+/// d(state)/d(w) for a small rigid motion w = (dx, dy, dtheta) of the whole state about the world
+/// origin: (3 + 2N) x 3, state = (pose, landmarks). The scenes' common map error is A w.
+Eigen::MatrixXd rigid_motion_jacobian(const Pose2<double>& pose, const std::vector<Eigen::Vector2d>& landmarks);
+
 /// Generates one scene; deterministic for a seed.
 Scene make_scene(const SceneParams& p, std::uint64_t seed);
 
