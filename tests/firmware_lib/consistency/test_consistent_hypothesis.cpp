@@ -84,7 +84,9 @@ host::Scene wrong_pose_scene() {
   const double offsets[7][2] = {{0.03, -0.02}, {-0.04, 0.01}, {0.02, 0.05}, {-0.01, -0.03},
                                 {0.05, 0.02}, {-0.03, 0.04}, {0.01, -0.05}};
   const int n = static_cast<int>(s.true_landmarks.size());
-  for (int j = 0; j < n; ++j) s.est_landmarks.push_back(s.true_landmarks[j] + Eigen::Vector2d(offsets[j][0], offsets[j][1]));
+  for (int j = 0; j < n; ++j) {
+    s.est_landmarks.push_back(s.true_landmarks[j] + Eigen::Vector2d(offsets[j][0], offsets[j][1]));
+  }
   s.P = Eigen::MatrixXd::Zero(3 + 2 * n, 3 + 2 * n);
   s.P.topLeftCorner<3, 3>() = Eigen::Vector3d(2.5 * 2.5, 2.5 * 2.5, 1.0).asDiagonal();
   s.P.bottomRightCorner(2 * n, 2 * n).diagonal().setConstant(0.05 * 0.05);
