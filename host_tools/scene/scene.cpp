@@ -6,6 +6,21 @@
 
 namespace geojcbb::host {
 
+Eigen::MatrixXd rigid_motion_jacobian(const Pose2<double>& pose, const std::vector<Eigen::Vector2d>& landmarks) {
+  const int n = static_cast<int>(landmarks.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 + 2 * n, 3);
+  auto rigid = [&](int row, const Eigen::Vector2d& at) {  // small rotation about the origin
+    A(row, 0) = 1;
+    A(row + 1, 1) = 1;
+    A(row, 2) = -at.y();
+    A(row + 1, 2) = at.x();
+  };
+  rigid(0, Eigen::Vector2d(pose.x, pose.y));
+  A(2, 2) = 1;
+  for (int j = 0; j < n; ++j) rigid(3 + 2 * j, landmarks[j]);
+  return A;
+}
+
 Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -41,19 +56,9 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   Eigen::VectorXd wsig(wdim);
   wsig << p.sigma_common_xy_m, p.sigma_common_xy_m, p.sigma_common_theta_rad, p.sigma_pose_xy_m,
       p.sigma_pose_xy_m, p.sigma_pose_theta_rad, Eigen::VectorXd::Constant(2 * n, p.sigma_landmark_m);
-  auto rigid = [&](int row, const Eigen::Vector2d& at) {  // small rotation about the origin
-    A(row, 0) = 1;
-    A(row + 1, 1) = 1;
-    A(row, 2) = -at.y();
-    A(row + 1, 2) = at.x();
-  };
-  rigid(0, Eigen::Vector2d(s.true_pose.x, s.true_pose.y));
-  A(2, 2) = 1;
+  A.leftCols<3>() = rigid_motion_jacobian(s.true_pose, s.true_landmarks);
   A.block<3, 3>(0, 3).setIdentity();
-  for (int j = 0; j < n; ++j) {
-    rigid(3 + 2 * j, s.true_landmarks[j]);
-    A.block<2, 2>(3 + 2 * j, 6 + 2 * j).setIdentity();
-  }
+  for (int j = 0; j < n; ++j) A.block<2, 2>(3 + 2 * j, 6 + 2 * j).setIdentity();
   Eigen::VectorXd w(wdim);
   for (int k = 0; k < wdim; ++k) w[k] = wsig[k] * gauss(rng);
   const Eigen::VectorXd e = A * w;
@@ -61,17 +66,7 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   s.est_pose = {s.true_pose.x + e[0], s.true_pose.y + e[1], wrap_angle(s.true_pose.theta + e[2])};
   for (int j = 0; j < n; ++j) s.est_landmarks.push_back(s.true_landmarks[j] + e.segment<2>(3 + 2 * j));
 
-  // Predictions and C = H P H^T, H = [J_z_pose | 0 .. J_z_landmark_j .. 0].
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * n, dim);
-  for (int j = 0; j < n; ++j) {
-    Mat23<double> Jp;
-    Mat2<double> Jl;
-    s.h.push_back(observe(s.est_pose, Vec2<double>(s.est_landmarks[j]), &Jp, &Jl));
-    H.block<2, 3>(2 * j, 0) = Jp;
-    H.block<2, 2>(2 * j, 3 + 2 * j) = Jl;
-  }
-  s.C = H * s.P * H.transpose();
-  s.C = (0.5 * (s.C + s.C.transpose())).eval();  // eval: the transpose aliases s.C
+  predict_measurements(s);
 
   // Observations: distinct landmarks in random order, then clutter; shuffled.
   s.R = Eigen::Vector2d(p.sigma_range_m * p.sigma_range_m, p.sigma_bearing_rad * p.sigma_bearing_rad)
@@ -101,6 +96,22 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
     s.z.push_back(z);
   }
   return s;
+}
+
+void predict_measurements(Scene& s) {
+  // C = H P H^T, H = [J_z_pose | 0 .. J_z_landmark_j .. 0].
+  const int n = static_cast<int>(s.est_landmarks.size());
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * n, 3 + 2 * n);
+  s.h.clear();
+  for (int j = 0; j < n; ++j) {
+    Mat23<double> Jp;
+    Mat2<double> Jl;
+    s.h.push_back(observe(s.est_pose, Vec2<double>(s.est_landmarks[j]), &Jp, &Jl));
+    H.block<2, 3>(2 * j, 0) = Jp;
+    H.block<2, 2>(2 * j, 3 + 2 * j) = Jl;
+  }
+  s.C = H * s.P * H.transpose();
+  s.C = (0.5 * (s.C + s.C.transpose())).eval();  // eval: the transpose aliases s.C
 }
 
 Score score(const Scene& s, const std::vector<int>& hypothesis) {

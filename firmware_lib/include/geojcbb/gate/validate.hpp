@@ -41,12 +41,31 @@ template <typename T, class B>
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
   }
+  const Status s = validate_observations(obs);
+  if (s != Status::kOk) return s;
+  return validate_prediction(pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); });
+}
+
+/// The observations' values (counts are checked by the caller).
+/// @return kOk; kNonFinite; kInvalidInput for a negative range or |bearing| > pi; kNotSymmetric /
+///         kNotPositiveDefinite for a bad R_i.
+template <typename T, class B>
+[[nodiscard]] Status validate_observations(const Observations<T, B>& obs) {
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
     if (obs.z[i].x() < T(0) || std::abs(obs.z[i].y()) > kPi<T>) return Status::kInvalidInput;
     if (!nearly_equal(obs.R[i](0, 1), obs.R[i](1, 0))) return Status::kNotSymmetric;
     if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
   }
+  return Status::kOk;
+}
+
+/// The prediction's values (counts and C's size are checked by the caller); C only on the candidates
+/// for which in_region(h) holds.
+/// @return kOk; kNonFinite; kInvalidInput for a negative id; kNotSymmetric / kNotPositiveDefinite
+///         for a bad C.
+template <typename T, class B, class InRegion>
+[[nodiscard]] Status validate_prediction(const Prediction<T, B>& pred, InRegion in_region) {
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
     if (!pred.h[j].allFinite()) return Status::kNonFinite;
     if (pred.id[j] < 0) return Status::kInvalidInput;
@@ -54,9 +73,9 @@ template <typename T, class B>
   // C is checked where the call reads it: the blocks of candidates inside the local region (all
   // candidates when the region is off), lower triangle against upper.
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
-    if (!in_local_region(cfg, pred.h[j])) continue;
+    if (!in_region(pred.h[j])) continue;
     for (int k = j; k < pred.count; ++k) {  // <= kMaxCandidates
-      if (!in_local_region(cfg, pred.h[k])) continue;
+      if (!in_region(pred.h[k])) continue;
       for (int a = 0; a < 2; ++a) {
         for (int b = 0; b < 2; ++b) {
           if (k == j && a < b) continue;

@@ -48,8 +48,16 @@ struct Scene {
   Eigen::MatrixXd C;                            ///< 2N x 2N  H P H^T
 };
 
+/// d(state)/d(w) for a small rigid motion w = (dx, dy, dtheta) of the whole state about the world
+/// origin: (3 + 2N) x 3, state = (pose, landmarks). The scenes' common map error is A w.
+Eigen::MatrixXd rigid_motion_jacobian(const Pose2<double>& pose, const std::vector<Eigen::Vector2d>& landmarks);
+
 /// Generates one scene; deterministic for a seed.
 Scene make_scene(const SceneParams& p, std::uint64_t seed);
+
+/// Recomputes s.h and s.C = H P H^T from s.est_pose, s.est_landmarks and s.P (make_scene calls it;
+/// a test that moves the estimate calls it again).
+void predict_measurements(Scene& s);
 
 /// Copies a scene into the fixed-capacity inputs of the association core.
 /// @return false when the scene exceeds the capacity B.
