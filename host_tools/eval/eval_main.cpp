@@ -559,11 +559,6 @@ int main(int argc, char** argv) {
                  "window over which the drive's scale and noise are fitted [s]")
       ->default_val(mo.calibration_options.fit_window_s)
       ->check(CLI::Range(0.1, 30.0));
-  // MRCLAM's defaults: the landmark rules that keep the other robots and the missed pairings out of
-  // the map (docs/mrclam.md measures each).
-  mo.run.landmark_policy.miss_probability = 1e-5f;
-  mo.run.static_gate_level = 0.95;
-  mo.run.new_if_candidates_taken = true;
   add_robustness_options(*mr, mo.run);
   LinkCli mr_link;
   add_link_options(*mr, mr_link,

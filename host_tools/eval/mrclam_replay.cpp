@@ -137,6 +137,25 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
   return run_inputs(src, opt);
 }
 
+RunOptions mrclam_run_defaults() {
+  RunOptions o;
+  o.landmark_policy.miss_probability = 1e-5f;
+  o.static_gate_level = 0.95;
+  o.new_if_candidates_taken = true;
+  return o;
+}
+
+MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibration& calibration, bool camera,
+                         bool drive, double inflation) {
+  MrclamModel m;
+  m.noise = noise;
+  m.camera = camera;
+  m.drive = drive;
+  m.inflation = inflation;
+  m.calibration = calibration;
+  return m;
+}
+
 std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
   const std::size_t n = ds.landmarks.size();
   std::vector<int> g(n);
@@ -237,12 +256,9 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     }
     const auto a = std::chrono::steady_clock::now();
     try {
-      MrclamModel model;
-      model.noise = data[jb.d].noise;
-      model.camera = o.camera;
-      model.drive = o.drive;
-      model.inflation = o.model_inflation;
-      if (!data[jb.d].calibration.empty()) model.calibration = data[jb.d].calibration[jb.r];
+      const MrclamModel model =
+          mrclam_model(data[jb.d].noise, data[jb.d].calibration.empty() ? mrclam::RobotCalibration{} : data[jb.d].calibration[jb.r],
+                       o.camera, o.drive, o.model_inflation);
       MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {

@@ -89,3 +89,71 @@ TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new - compatibl
   CHECK(p->out.feature[2] == kNewFeature);
   CHECK(p->out.pairings == 1);
 }
+
+TEST_CASE_TEMPLATE("new if candidates taken: an observation whose only compatible feature is taken is new", T, float,
+                   double) {
+  auto p = make_problem<T, DefaultBounds>();
+  // As above, with the option: observation 1 could only be feature 7, which observation 0 holds.
+  p->obs.count = 3;
+  p->obs.z[0] = Vec2<T>(T(5), T(0));
+  p->obs.z[1] = Vec2<T>(T(5.01), T(0));
+  p->obs.z[2] = Vec2<T>(T(2), T(1));
+  for (int i = 0; i < 3; ++i) p->obs.R[i] = Mat2<T>::Identity() * T(0.01);
+  p->pred.count = 2;
+  p->pred.id[0] = 7;
+  p->pred.h[0] = Vec2<T>(T(5), T(0));
+  p->pred.id[1] = 8;
+  p->pred.h[1] = Vec2<T>(T(9), T(1));  // far from everything
+  p->pred.C = JointCovariance<T, DefaultBounds>::Identity(4, 4) * T(0.01);
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, true, true);
+  cfg.new_if_candidates_taken = true;
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 7);
+  CHECK(p->out.feature[1] == kNewFeature);
+  // Its d2 for the augmentation gate is the nearest over the features it could be: feature 8 only.
+  const Mat2<T> S = Mat2<T>::Identity() * T(0.02);
+  CHECK(p->out.d2[1] == doctest::Approx(double(mahalanobis2(innovation(p->obs.z[1], p->pred.h[1]), S))));
+  CHECK(p->out.feature[2] == kNewFeature);
+  // Without mutual exclusion the option does nothing: both pair with 7.
+  cfg.mutual_exclusion = false;
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[1] == 7);
+}
+
+TEST_CASE_TEMPLATE("decline: an observation between two features is left unmatched; a clear one is paired", T, float,
+                   double) {
+  for (const SearchMethod search : {SearchMethod::kJcbb, SearchMethod::kIcnn}) {
+    auto p = make_problem<T, DefaultBounds>();
+    // Observation 0 lies midway between features 100 and 101 (equal d2); observation 1 sits on
+    // feature 102, far from the others.
+    p->obs.count = 2;
+    p->obs.z[0] = Vec2<T>(T(5), T(0.01));
+    p->obs.z[1] = Vec2<T>(T(3), T(-0.6));
+    for (int i = 0; i < 2; ++i) p->obs.R[i] = Mat2<T>::Identity() * T(1e-5);
+    p->pred.count = 3;
+    p->pred.C = JointCovariance<T, DefaultBounds>::Identity(6, 6) * T(1e-5);  // S: 0.0045 rad
+    const Vec2<T> h[3] = {Vec2<T>(T(5), T(0)), Vec2<T>(T(5), T(0.02)), Vec2<T>(T(3), T(-0.6))};
+    for (int j = 0; j < 3; ++j) {
+      p->pred.id[j] = 100 + j;
+      p->pred.h[j] = h[j];
+    }
+    auto cfg = make_config<T, DefaultBounds>(search, true, true);
+    CAPTURE(static_cast<int>(search));
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.feature[0] >= 100);  // off: a guess
+    CHECK(p->out.diag.declined == 0);
+    cfg.ambiguity_margin = T(1);
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.feature[0] == kUnmatched);  // on: declined, neither paired nor new
+    CHECK(p->out.feature[1] == 102);
+    CHECK(p->out.pairings == 1);
+    CHECK(p->out.diag.declined == 1);
+    // The reported joint d2 is the kept hypothesis's: observation 1 alone, on its feature.
+    CHECK(p->out.joint_d2 == doctest::Approx(0.0).epsilon(1e-6));
+    // Move observation 0 next to feature 100: feature 101 is out of its gate, so it is paired.
+    p->obs.z[0] = Vec2<T>(T(5), T(-0.002));
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.feature[0] == 100);
+    CHECK(p->out.diag.declined == 0);
+  }
+}

@@ -88,6 +88,15 @@ class MrclamSource : public RecordedSource {
 RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const RunOptions& options,
                        const MrclamModel& model, bool drop_other_robots = false);
 
+/// The run options MRCLAM replays start from: the landmark rules that keep the other robots and
+/// the missed pairings out of the map (docs/mrclam.md measures each): the miss-probability rule at
+/// 1e-5, the static gate at chi2(0.95, 2), and a new landmark when every compatible one is taken.
+RunOptions mrclam_run_defaults();
+
+/// One robot's model as the report builds it.
+MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibration& calibration, bool camera = true,
+                         bool drive = true, double inflation = 1.2);
+
 struct MrclamOptions {
   std::string data_dir;  ///< empty: mrclam::default_data_dir()
   /// Non-empty: one CSV per replay in this folder (trace_<dataset>_<robot>_<strategy>.csv: per scan
@@ -96,7 +105,7 @@ struct MrclamOptions {
   std::vector<int> datasets{6, 7};
   std::vector<int> robots{1, 2, 3, 4, 5};
   std::vector<Method> strategies;
-  RunOptions run;
+  RunOptions run = mrclam_run_defaults();
   double sigma_range_m = 0, sigma_bearing_rad = 0;  ///< 0: from the data
   double sigma_v_mps = 0, sigma_w_radps = 0;        ///< 0: from the data
   double noise_inflation = 1.5;                     ///< on the data's robust spreads (their tails are heavy)

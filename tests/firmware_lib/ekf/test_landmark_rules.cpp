@@ -1,0 +1,274 @@
+// EKF landmark life cycle and filter options (issue 11): an object that moves is removed by the
+// static gate; a confirmed landmark missed in view far more often than its own detection rate allows
+// is removed, one seen at its rate is kept; two landmarks 0.15 m apart, the second first seen from
+// near, become two landmarks, not one and not three; known landmarks; first-estimates Jacobians;
+// the sensor and drive models; bad input changes no state; no allocation.
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <memory>
+
+#include "geojcbb/ekf/sensor_model.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/slam_step.hpp"
+#include "support/alloc_counter.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::ekf;
+
+namespace {
+using LB = Bounds<8, 16, 3, 2000, 16>;
+
+template <typename T>
+struct Rig {
+  Slam<T, LB> slam;
+  ekf::Workspace<T, LB> ws;
+  Observations<T, LB> obs;
+  Association<T, LB> assoc;
+  Prediction<T, LB> pred;
+};
+
+// One scan of a single observation z of landmark `id` (or unpaired when id < 0) from the current
+// pose: update when paired, then review with the given policy.
+template <typename T>
+ReviewStats scan(Rig<T>& r, const Vec2<T>& z, FeatureId id, const LandmarkPolicy& policy) {
+  LocalMapStats st;
+  REQUIRE(r.slam.predict_local(T(30), r.ws, r.pred, st) == Status::kOk);
+  r.obs.clear();
+  REQUIRE(r.obs.push(z, Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal())) == Status::kOk);
+  r.assoc.count = 1;
+  r.assoc.feature[0] = id;
+  if (id >= 0) REQUIRE(r.slam.update(r.obs, r.assoc, r.ws) == Status::kOk);
+  ReviewStats rs;
+  REQUIRE(r.slam.review(r.pred, r.assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, policy, rs) == Status::kOk);
+  return rs;
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("static gate: a landmark that follows a moving object is removed; a static one stays", T, float,
+                   double) {
+  for (const bool moving : {true, false}) {
+    auto r = std::make_unique<Rig<T>>();
+    REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+    FeatureId id = -1;
+    const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
+    REQUIRE(r->slam.augment(Vec2<T>(T(4), T(0)), R, id) == Status::kOk);
+    LandmarkPolicy policy;
+    policy.static_gate_d2 = 13.8f;  // chi2(0.999, 2)
+    int removed_at = -1;
+    for (int k = 1; k <= 40 && removed_at < 0; ++k) {
+      // The object drives away across the view at 6 cm per scan (another robot); a static landmark
+      // is seen where it is.
+      const T y = moving ? T(0.06) * T(k) : T(0);
+      const Vec2<T> z(std::sqrt(T(16) + y * y), std::atan2(y, T(4)));
+      const ReviewStats rs = scan(*r, z, id, policy);
+      if (rs.removed_moved > 0) removed_at = k;
+    }
+    CAPTURE(moving);
+    if (moving) {
+      CHECK(removed_at > 0);
+      CHECK(removed_at <= 10);
+      CHECK(r->slam.landmarks() == 0);
+      CHECK(r->slam.index_of(id) == -1);
+    } else {
+      CHECK(removed_at == -1);
+      CHECK(r->slam.landmarks() == 1);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("miss probability: missed far beyond its own rate is removed; seen at its rate stays", T, float,
+                   double) {
+  for (const bool gone : {true, false}) {
+    auto r = std::make_unique<Rig<T>>();
+    REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+    FeatureId id = -1;
+    FeatureId other = -1;
+    const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
+    REQUIRE(r->slam.augment(Vec2<T>(T(4), T(0)), R, id) == Status::kOk);
+    REQUIRE(r->slam.augment(Vec2<T>(T(5), T(0.3)), R, other) == Status::kOk);
+    LandmarkPolicy policy;
+    policy.miss_probability = 1e-3f;
+    const Vec2<T> z(T(4), T(0));
+    // Seen in every second scan for 40 scans: a detection rate of about 0.5.
+    for (int k = 0; k < 40; ++k) (void)scan(*r, z, k % 2 == 0 ? id : -1, policy);
+    REQUIRE(r->slam.index_of(id) >= 0);
+    // Then: gone (never seen again), or seen at its rate.
+    int removed_at = -1;
+    for (int k = 0; k < 60 && removed_at < 0; ++k) {
+      const ReviewStats rs = scan(*r, z, !gone && k % 2 == 0 ? id : -1, policy);
+      if (rs.removed_missed > 0) removed_at = k + 1;
+    }
+    CAPTURE(gone);
+    if (gone) {
+      // (1 - p)^n < 1e-3 with p about 0.5: n = 10 misses in a row.
+      CHECK(removed_at >= 9);
+      CHECK(removed_at <= 11);
+      CHECK(r->slam.index_of(id) == -1);
+    } else {
+      CHECK(removed_at == -1);
+      CHECK(r->slam.index_of(id) >= 0);
+    }
+    // The other landmark, never paired, is tentative: the tentative rule removed it, not this one.
+    CHECK(r->slam.index_of(other) == -1);
+  }
+}
+
+TEST_CASE_TEMPLATE("two landmarks 0.15 m apart, the second first seen from near: two landmarks, not one or three", T,
+                   float, double) {
+  using SB = Bounds<8, 16, 3, 2000, 16>;
+  auto step = std::make_unique<node::SlamStep<T, SB>>();
+  node::StepSettings<T> s;
+  s.strategy = Strategy::kGeojcbb;
+  s.params.local_radius_m = T(20);
+  s.params.new_if_candidates_taken = true;
+  s.view = Visibility<T>{T(0.3), T(15), T(1.0)};
+  REQUIRE(step->configure(s) == Status::kOk);
+  REQUIRE(step->reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+  const Vec2<double> A(8, 0), Bp(8, 0.15);
+  const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
+  auto obs = std::make_unique<Observations<T, SB>>();
+  auto res = std::make_unique<node::StepResult<T, SB>>();
+  FeatureId id_a = -1, id_b = -1;
+  for (int k = 0; k < 30; ++k) {
+    const double x = 0.2 * k;  // drives from 8 m to 2 m away
+    if (k > 0) REQUIRE(step->predict(ekf::Odometry<T>{T(0.2), T(0), T(1), T(0.002), T(0.0005)}) == Status::kOk);
+    obs->clear();
+    auto push = [&](const Vec2<double>& l) {
+      const Vec2<double> z = observe(Pose2<double>{x, 0, 0}, l);
+      REQUIRE(obs->push(z.cast<T>(), R) == Status::kOk);
+    };
+    push(A);
+    const bool near = k >= 20;  // from 4 m on, B is seen too (it was hidden behind A before)
+    if (near) push(Bp);
+    REQUIRE(step->step(*obs, *res) == Status::kOk);
+    if (k == 0) {
+      REQUIRE(res->outcome[0] == node::Outcome::kNewLandmark);
+      id_a = res->feature[0];
+    } else {
+      CHECK(res->outcome[0] == node::Outcome::kPaired);
+      CHECK(res->feature[0] == id_a);
+    }
+    if (k == 20) {
+      CHECK(res->outcome[1] == node::Outcome::kNewLandmark);
+      id_b = res->feature[1];
+    } else if (near) {
+      CHECK(res->outcome[1] == node::Outcome::kPaired);
+      CHECK(res->feature[1] == id_b);
+    }
+  }
+  CHECK(step->slam().landmarks() == 2);
+  CHECK(id_b != id_a);
+  const int ja = step->slam().index_of(id_a), jb = step->slam().index_of(id_b);
+  REQUIRE(ja >= 0);
+  REQUIRE(jb >= 0);
+  CHECK((step->slam().landmark(ja).template cast<double>() - A).norm() < 0.05);
+  CHECK((step->slam().landmark(jb).template cast<double>() - Bp).norm() < 0.05);
+}
+
+TEST_CASE_TEMPLATE("known landmarks: added uncorrelated with their covariance; bad input changes nothing", T, float,
+                   double) {
+  auto r = std::make_unique<Rig<T>>();
+  REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  FeatureId id = -1;
+  const Mat2<T> Pll = Mat2<T>::Identity() * T(1e-4);
+  REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(3), T(1)), Pll, id) == Status::kOk);
+  CHECK(id == 0);
+  CHECK(r->slam.landmarks() == 1);
+  for (int c = 0; c < 3; ++c) CHECK(r->slam.cov(3, c) == T(0));
+  CHECK(r->slam.cov(3, 3) == Pll(0, 0));
+  auto before = std::make_unique<Slam<T, LB>>(r->slam);
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  CHECK(r->slam.add_known_landmark(Vec2<T>(nan, T(1)), Pll, id) == Status::kNonFinite);
+  CHECK(r->slam.add_known_landmark(Vec2<T>(T(1), T(1)), Mat2<T>::Zero(), id) == Status::kNotPositiveDefinite);
+  CHECK(std::memcmp(before.get(), &r->slam, sizeof(Slam<T, LB>)) == 0);
+  for (int k = 1; k < LB::kMaxLandmarks; ++k) REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(k), T(2)), Pll, id) == Status::kOk);
+  CHECK(r->slam.add_known_landmark(Vec2<T>(T(1), T(1)), Pll, id) == Status::kCapacityExceeded);
+  // A bad policy (the new rules' fields out of range) is refused before anything changes.
+  LocalMapStats st;
+  REQUIRE(r->slam.predict_local(T(30), r->ws, r->pred, st) == Status::kOk);
+  auto full = std::make_unique<Slam<T, LB>>(r->slam);
+  LandmarkPolicy bad;
+  bad.miss_probability = 1.0f;
+  r->assoc.count = 0;
+  ReviewStats rs;
+  CHECK(r->slam.review(r->pred, r->assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, bad, rs) == Status::kInvalidInput);
+  bad = LandmarkPolicy{};
+  bad.static_gate_d2 = -1.0f;
+  CHECK(r->slam.review(r->pred, r->assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, bad, rs) == Status::kInvalidInput);
+  CHECK(std::memcmp(full.get(), &r->slam, sizeof(Slam<T, LB>)) == 0);
+}
+
+TEST_CASE_TEMPLATE("first-estimates Jacobians: a landmark's Jacobians stay at its first estimate; off, at the current",
+                   T, float, double) {
+  for (const bool fej : {true, false}) {
+    auto r = std::make_unique<Rig<T>>();
+    FilterOptions o;
+    o.first_estimates_jacobians = fej;
+    REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(0.01), o) == Status::kOk);
+    FeatureId id = -1;
+    REQUIRE(r->slam.augment(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);
+    const Vec2<T> first = r->slam.landmark(0);
+    (void)scan(*r, Vec2<T>(T(4.3), T(0.05)), id, LandmarkPolicy{});
+    CAPTURE(fej);
+    CHECK(r->slam.landmark(0) != first);  // the update moved it
+    CHECK(r->slam.linearisation_point(0) == (fej ? first : r->slam.landmark(0)));
+  }
+}
+
+TEST_CASE_TEMPLATE("sensor and drive models: corrections, covariances and bad input", T, float, double) {
+  RangeBearingModel<T> m;
+  m.range_rel_bias0 = T(0.03);
+  m.range_rel_bias2_per_rad2 = T(-0.5);
+  m.bearing_bias_rad = T(-0.01);
+  m.sigma_range_m = T(0.01);
+  m.sigma_range_rel = T(0.01);
+  m.sigma_bearing_rad = T(0.008);
+  Vec2<T> z(T(9), T(9));
+  Mat2<T> R = Mat2<T>::Zero();
+  REQUIRE(m.correct(Vec2<T>(T(4), T(0.29)), z, R) == Status::kOk);
+  const T b = T(0.3);
+  CHECK(z.y() == doctest::Approx(double(b)));
+  CHECK(z.x() == doctest::Approx(4.0 / (1.03 - 0.5 * 0.09)).epsilon(1e-5));
+  CHECK(R(0, 0) == doctest::Approx(1e-4 + 1e-4 * double(z.x() * z.x())).epsilon(1e-4));
+  CHECK(R(1, 1) == doctest::Approx(0.008 * 0.008).epsilon(1e-5));
+  CHECK(R(0, 1) == T(0));
+  const Vec2<T> z0 = z;
+  CHECK(m.correct(Vec2<T>(T(-1), T(0)), z, R) == Status::kInvalidInput);
+  CHECK(m.correct(Vec2<T>(std::numeric_limits<T>::infinity(), T(0)), z, R) == Status::kNonFinite);
+  m.sigma_bearing_rad = T(0);
+  CHECK(m.correct(Vec2<T>(T(4), T(0)), z, R) == Status::kInvalidInput);
+  CHECK(z == z0);
+
+  OdometryModel<T> d;
+  d.scale_v = T(0.9);
+  d.scale_w = T(0.8);
+  d.alpha_v_sqrt_s = T(0.1);
+  d.q_w_rad2ps = T(1e-4);
+  Odometry<T> u;
+  REQUIRE(d.odometry(T(0.1), T(0.5), T(0.25), u) == Status::kOk);
+  CHECK(u.v_mps == doctest::Approx(0.09));
+  CHECK(u.w_radps == doctest::Approx(0.4));
+  // var(v dt) = alpha_v^2 v^2 dt: sigma_v = alpha_v v / sqrt(dt).
+  CHECK(u.sigma_v_mps == doctest::Approx(0.1 * 0.09 / 0.5).epsilon(1e-5));
+  CHECK(u.sigma_w_radps == doctest::Approx(std::sqrt(1e-4 / 0.25)).epsilon(1e-5));
+  const Odometry<T> u0 = u;
+  CHECK(d.odometry(T(0.1), T(0.5), T(-1), u) == Status::kInvalidInput);
+  d.scale_v = T(-1);
+  CHECK(d.odometry(T(0.1), T(0.5), T(0.25), u) == Status::kInvalidInput);
+  CHECK(u.v_mps == u0.v_mps);
+}
+
+TEST_CASE_TEMPLATE("the landmark rules and known landmarks allocate nothing", T, float, double) {
+  auto r = std::make_unique<Rig<T>>();
+  REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+  FeatureId id = -1;
+  LandmarkPolicy policy;
+  policy.static_gate_d2 = 13.8f;
+  policy.miss_probability = 1e-3f;
+  test::AllocationGuard guard;
+  REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+  for (int k = 0; k < 30; ++k) (void)scan(*r, Vec2<T>(T(4), T(0.001) * T(k % 2)), k % 3 == 0 ? id : -1, policy);
+  CHECK(r->slam.index_of(id) == 0);
+  CHECK(guard.allocations() == 0);
+}
