@@ -87,6 +87,10 @@ void add_robustness_options(CLI::App& app, RunOptions& run) {
                  "rate would be missed so with less than this probability (0: off)")
       ->default_val(run.landmark_policy.miss_probability)
       ->check(CLI::Range(0.0, 0.5));
+  app.add_option("--occlusion", run.occlusion_rad,
+                 "a landmark with a nearer one within this bearing [rad] is hidden, so not expected (0: off)")
+      ->default_val(run.occlusion_rad)
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--static-gate-level", run.static_gate_level,
                  "remove a landmark whose estimate leaves, at this chi-square level, the region it was added in "
                  "(an object that moves; 0: off)")

@@ -142,6 +142,7 @@ RunOptions mrclam_run_defaults() {
   o.landmark_policy.miss_probability = 1e-5f;
   o.static_gate_level = 0.95;
   o.new_if_candidates_taken = true;
+  o.occlusion_rad = 0.03;
   return o;
 }
 

@@ -177,6 +177,7 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
   ss.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  ss.view.occlusion_rad = opt.occlusion_rad;
   ss.policy = opt.landmark_policy;
   if (opt.static_gate_level > 0) {
     double g = 0;

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "geojcbb_host/mrclam.hpp"
+#include "geojcbb_host/mrclam_calibration.hpp"
 
 namespace {
 
@@ -71,7 +72,26 @@ int main(int argc, char** argv) {
   double window_s = 1.0;
   app.add_option("--data", root, "folder holding MRCLAM_Dataset6 and MRCLAM_Dataset7");
   app.add_option("--window", window_s, "odometry comparison window [s]")->check(CLI::PositiveNumber);
+  bool calibrate = false;
+  CalibrationOptions copt;
+  app.add_flag("--calibrate", calibrate,
+               "print each robot's fitted camera and drive (mrclam_calibration.hpp) instead of the tables");
+  app.add_option("--fit-window", copt.fit_window_s, "window of the drive's scale and noise fit [s]")
+      ->default_val(copt.fit_window_s);
   CLI11_PARSE(app, argc, argv);
+  if (calibrate) {
+    try {
+      for (int n : {6, 7}) {
+        const Dataset ds = load_dataset(dataset_dir(n, root));
+        std::printf("MRCLAM_Dataset%d\n", n);
+        for (int r = 1; r <= kRobots; ++r) std::printf("  %s\n", describe(calibrate_robot(ds, load_robot(ds, r), copt)).c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
 
   Column c[2];
   try {

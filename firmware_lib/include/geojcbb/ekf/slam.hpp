@@ -55,11 +55,14 @@ struct Workspace {
 
 /// Where the sensor can see: review() counts a landmark as expected only when its predicted
 /// measurement lies inside. Shrink it by a few sigma so landmarks on the edge are not penalised.
+/// Occlusion: with occlusion_rad > 0, a landmark with a nearer one within occlusion_rad of its
+/// bearing is hidden behind it, so not expected (tubes in a row, seen along the row).
 template <typename T>
 struct Visibility {
   T min_range_m = T(0);
   T max_range_m = T(0);
   T half_fov_rad = T(0);
+  T occlusion_rad = T(0);
 };
 
 /// Tentative landmarks: a landmark is confirmed once it has been paired `confirm_hits` times (its
@@ -422,7 +425,8 @@ class Slam {
   [[nodiscard]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
                               const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats) {
     if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
-        !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad)) {
+        !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
+        !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {
       return Status::kInvalidInput;
     }
     if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 ||
@@ -437,8 +441,10 @@ class Slam {
       bool paired = false;
       for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
       const Vec2<T>& h = pred.h[a];
-      const bool in_view =
-          h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+      bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+      for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
+        in_view = !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
+      }
       stats.expected += in_view;
       if ((in_view || paired) && expected_[j] < 65535) ++expected_[j];
       if (paired) {

@@ -49,6 +49,7 @@ struct RunOptions {
   std::vector<Eigen::Vector2d> known_map;
   double known_map_sigma_m = 0.01;
   double view_margin_m = 1.0;           ///< a landmark within this of the range limits is not expected
+  double occlusion_rad = 0;             ///< ekf::Visibility::occlusion_rad (0: off)
   /// Optional: true landmark -> group, for RunResult::group_score (landmarks
   /// too close together for geometry to tell apart share a group). Empty:
   /// group_score equals score.
