@@ -217,6 +217,11 @@ struct HasRule : std::false_type {};
 template <class R>
 struct HasRule<R, std::void_t<decltype(R::kRule), decltype(std::declval<const R&>().rule())>> : std::true_type {};
 
+/// A record's field list as one constant object (static storage): the codec walks it at run time
+/// without building the descriptors on the stack (a STATS list is about 1.1 KB).
+template <class R>
+inline constexpr auto kFieldsOf = R::fields();
+
 template <class R>
 constexpr std::size_t field_count() {
   return std::tuple_size_v<decltype(R::fields())>;
@@ -308,7 +313,7 @@ void write_one(Writer& w, const R& rec, const List<R, C, Item, N>& f) {
 
 template <class R>
 void write_record(Writer& w, const R& rec) {
-  std::apply([&](const auto&... f) { (write_one(w, rec, f), ...); }, R::fields());
+  std::apply([&](const auto&... f) { (write_one(w, rec, f), ...); }, kFieldsOf<R>);
 }
 
 // --- read ----------------------------------------------------------------------------------------
@@ -371,7 +376,7 @@ Error read_one(Reader& r, std::size_t n, R& rec, const List<R, C, Item, N>& f) {
 template <class R>
 Error read_record(Reader& r, std::size_t n, R& rec) {
   Error e = Error::kOk;
-  std::apply([&](const auto&... f) { (void)(((e = read_one(r, n, rec, f)) == Error::kOk) && ...); }, R::fields());
+  std::apply([&](const auto&... f) { (void)(((e = read_one(r, n, rec, f)) == Error::kOk) && ...); }, kFieldsOf<R>);
   return e;
 }
 
@@ -444,9 +449,9 @@ Error range_one(const R& rec, const List<R, C, Item, N>& f) {
 template <class R>
 Error validate_record(const R& rec) {
   Error e = Error::kOk;
-  std::apply([&](const auto&... f) { (void)(((e = finite_one(rec, f)) == Error::kOk) && ...); }, R::fields());
+  std::apply([&](const auto&... f) { (void)(((e = finite_one(rec, f)) == Error::kOk) && ...); }, kFieldsOf<R>);
   if (e != Error::kOk) return e;
-  std::apply([&](const auto&... f) { (void)(((e = range_one(rec, f)) == Error::kOk) && ...); }, R::fields());
+  std::apply([&](const auto&... f) { (void)(((e = range_one(rec, f)) == Error::kOk) && ...); }, kFieldsOf<R>);
   if (e != Error::kOk) return e;
   if constexpr (HasRule<R>::value) e = rec.rule();
   return e;
@@ -456,7 +461,7 @@ Error validate_record(const R& rec) {
 template <class R>
 std::size_t item_count(const R& rec) {
   if constexpr (has_list<R>()) {
-    return rec.*(std::get<field_count<R>() - 1>(R::fields()).count);
+    return rec.*(std::get<field_count<R>() - 1>(kFieldsOf<R>).count);
   } else {
     (void)rec;
     return 0;
@@ -493,26 +498,12 @@ struct FieldInfo {
 namespace detail {
 template <class R, class T>
 constexpr FieldInfo info_of(const Field<R, T>& f, bool item, const char* items_name) {
-  FieldInfo i{};
-  i.name = f.name;
-  i.type = WireOf<T>::kType;
-  i.count = WireOf<T>::kCount;
-  i.elem_names = f.elem_names;
-  i.range = f.range;
-  i.unit = f.unit;
-  i.note = f.note;
-  i.item = item;
-  i.items_name = items_name;
-  return i;
+  return FieldInfo{f.name, WireOf<T>::kType, WireOf<T>::kCount, f.elem_names, f.range, f.unit, f.note, item,
+                   items_name};
 }
 template <class R, class C, class Item, std::size_t N>
 constexpr FieldInfo info_of(const List<R, C, Item, N>& f, bool, const char*) {
-  FieldInfo i{};
-  i.name = f.name;
-  i.type = WireType::kU8;
-  i.range = range::count();
-  i.note = f.note;
-  return i;
+  return FieldInfo{f.name, WireType::kU8, 1, nullptr, range::count(), "", f.note, false, ""};
 }
 template <class R, std::size_t K>
 constexpr void append_infos(std::array<FieldInfo, K>& out, std::size_t& k, bool item, const char* items_name) {
