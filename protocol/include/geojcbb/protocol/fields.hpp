@@ -148,10 +148,25 @@ struct List {
   const char* note;
 };
 
+namespace detail {
+template <class T>
+struct IsFloatArray : std::false_type {};
+template <std::size_t N>
+struct IsFloatArray<std::array<float, N>> : std::true_type {};
+}  // namespace detail
+
 template <class R, class T>
 constexpr Field<R, T> field(const char* name, T R::*member, Range r = range::any(), const char* unit = "",
-                            const char* note = "", const char* const* elem_names = nullptr) {
-  return Field<R, T>{name, member, r, unit, note, elem_names};
+                            const char* note = "") {
+  static_assert(!detail::IsFloatArray<T>::value, "an array of floats names its elements: field(name, member, range, unit, note, names)");
+  return Field<R, T>{name, member, r, unit, note, nullptr};
+}
+/// An array of floats: N f32 on the wire, each with its own name (p00 ... p22).
+template <class R, std::size_t N>
+constexpr Field<R, std::array<float, N>> field(const char* name, std::array<float, N> R::*member, Range r,
+                                               const char* unit, const char* note,
+                                               const char* const (&elem_names)[N]) {
+  return Field<R, std::array<float, N>>{name, member, r, unit, note, elem_names};
 }
 template <class R, class C, class Item, std::size_t N>
 constexpr List<R, C, Item, N> list(const char* name, C R::*count, std::array<Item, N> R::*items,

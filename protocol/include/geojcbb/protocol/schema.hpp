@@ -66,8 +66,9 @@ struct FixedText {
     }
     data[size++] = c;
   }
+  /// s must not be null (no null test: GCC's sanitizers make `&global != nullptr` non-constant).
   constexpr void put(const char* s) {
-    for (std::size_t i = 0; s != nullptr && s[i] != '\0'; ++i) put(s[i]);  // <= strlen(s)
+    for (std::size_t i = 0; s[i] != '\0'; ++i) put(s[i]);  // <= strlen(s)
   }
   constexpr void put_int(std::int64_t v) {
     if (v < 0) put('-');
@@ -192,7 +193,7 @@ constexpr void render_message_line(FixedText<N>& t) {
     }
     if (f.type == WireType::kF32 && f.count > 1) {
       for (std::size_t i = 0; i < f.count; ++i) {  // <= the array's length
-        detail::put_field_token(t, f.elem_names != nullptr ? f.elem_names[i] : "?", f);
+        detail::put_field_token(t, f.elem_names[i], f);  // field() requires a name per element
       }
     } else {
       detail::put_field_token(t, f.name, f);
