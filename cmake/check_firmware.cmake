@@ -14,15 +14,17 @@
 #                 ISR       regex of the interrupt handlers: the deepest handler chain plus
 #                           EXCEPTION_FRAME bytes (the hardware-stacked frame) is added on top, as
 #                           an interrupt can arrive at the deepest point (handlers do not nest).
-#   MODE=qemu     QEMU, ELF, INPUT, WORK_DIR, TIMEOUT [, MAX_STACK, MACHINE]: runs the firmware under
-#                 QEMU (MACHINE, default mps2-an386; -icount shift=0) with the session INPUT (hex bytes, and a line
-#                 "# replies: tt tt ..." of the expected reply types) on its UART, no fixed sleeps:
-#                 it must exit with status 0 (semihosting, after SHUTDOWN) and answer with exactly
-#                 the expected frames (COBS, version, length checked). Prints the device's STATS;
-#                 fails when its stack high-water mark exceeds MAX_STACK bytes. LEAD_DELIMITERS=N
-#                 (optional) sends N delimiters (0x00, empty frames: the node ignores them) before the
-#                 session, a margin for a board whose UART model drops what arrives before the
-#                 firmware enables it (netduinoplus2: QEMU reads stdin from the start).
+#   MODE=qemu     QEMU, ELF, INPUT, WORK_DIR, TIMEOUT, UART_CHECK [, MAX_STACK, MACHINE, LEAD_DELIMITERS]:
+#                 runs the firmware under QEMU (MACHINE, default mps2-an386; -icount shift=0) with the
+#                 session INPUT (hex bytes, and a line "# replies: tt tt ..." of the expected reply
+#                 types) on its UART, no fixed sleeps: it must exit with status 0 (semihosting, after
+#                 SHUTDOWN). UART_CHECK (geojcbb_uart_check, a host program on the protocol library)
+#                 writes the session's bytes, after LEAD_DELIMITERS delimiters (0x00, empty frames: the
+#                 node ignores them; a margin for a board whose UART model drops what arrives before the
+#                 firmware enables it, netduinoplus2: QEMU reads stdin from the start), and checks the
+#                 output: every frame passes the Decoder (COBS, length, CRC, version) and decodes as a
+#                 valid message, the reply types are the expected ones; it prints the device's STATS and
+#                 fails when its stack high-water mark exceeds MAX_STACK bytes.
 # Sets `var` to the files under `dir` with extension `ext`; fails when there are none.
 # Every *.ext file under each of the "|"-separated directories in `dirs`; each must have some.
 function(glob_or_fail var dirs ext)
@@ -235,49 +237,23 @@ elseif(MODE STREQUAL "callgraph")
     message(FATAL_ERROR "call chain ${total} B exceeds ${MAX_CHAIN} B")
   endif()
 elseif(MODE STREQUAL "qemu")
-  # The session: "# replies: tt tt ..." names the expected reply types; other lines are hex bytes.
-  file(STRINGS ${INPUT} lines)
-  set(expected "")
-  set(fmt "")
-  set(count 0)
-  foreach(line IN LISTS lines)
-    if(line MATCHES "^# replies:(.*)$")
-      string(STRIP "${CMAKE_MATCH_1}" expected)
-      string(REPLACE " " ";" expected "${expected}")
-    elseif(NOT line MATCHES "^#")
-      string(REGEX MATCHALL "[0-9a-fA-F][0-9a-fA-F]" bytes "${line}")
-      foreach(b IN LISTS bytes)
-        string(APPEND fmt "\\x${b}")
-        math(EXPR count "${count} + 1")
-      endforeach()
-    endif()
-  endforeach()
-  if(NOT expected OR count EQUAL 0)
-    message(FATAL_ERROR "${INPUT}: no '# replies:' line or no bytes")
+  # The session's bytes and the check of the replies are geojcbb_uart_check's (host_tools/wire, the
+  # protocol library's own Decoder and message decoders); this script only runs QEMU between them.
+  if(NOT DEFINED LEAD_DELIMITERS)
+    set(LEAD_DELIMITERS 0)
   endif()
-  # Bytes to a binary file with coreutils printf (\xHH escapes, NUL included).
+  if(NOT EXISTS "${UART_CHECK}")
+    message(FATAL_ERROR "geojcbb_uart_check not found at '${UART_CHECK}': build the host-release preset first")
+  endif()
   file(MAKE_DIRECTORY ${WORK_DIR})
-  find_program(PRINTF printf REQUIRED)
-  execute_process(COMMAND ${PRINTF} "${fmt}" OUTPUT_FILE ${WORK_DIR}/session.bin RESULT_VARIABLE rc)
-  file(SIZE ${WORK_DIR}/session.bin written)
-  if(NOT rc EQUAL 0 OR NOT written EQUAL count)
-    message(FATAL_ERROR "could not write the session (${written} of ${count} bytes)")
+  set(input ${WORK_DIR}/input.bin)
+  execute_process(COMMAND ${UART_CHECK} --session ${INPUT} --write-input ${input} --lead-delimiters ${LEAD_DELIMITERS}
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  if(NOT rc STREQUAL "0")
+    message(FATAL_ERROR "could not write the session:\n${out}${err}")
   endif()
-  set(input ${WORK_DIR}/session.bin)
-  if(LEAD_DELIMITERS GREATER 0)
-    find_program(HEAD head REQUIRED)
-    find_program(CAT cat REQUIRED)
-    execute_process(COMMAND ${HEAD} -c ${LEAD_DELIMITERS} /dev/zero OUTPUT_FILE ${WORK_DIR}/lead.bin RESULT_VARIABLE rc)
-    execute_process(COMMAND ${CAT} ${WORK_DIR}/lead.bin ${WORK_DIR}/session.bin OUTPUT_FILE ${WORK_DIR}/input.bin
-                    RESULT_VARIABLE rc2)
-    file(SIZE ${WORK_DIR}/input.bin written)
-    math(EXPR want "${LEAD_DELIMITERS} + ${count}")
-    if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0 OR NOT written EQUAL want)
-      message(FATAL_ERROR "could not write the padded session (${written} of ${want} bytes)")
-    endif()
-    set(input ${WORK_DIR}/input.bin)
-    math(EXPR count "${want}")
-  endif()
+  string(STRIP "${out}" out)
+  message(STATUS "${out}")
   # QEMU reads the session from stdin (-serial stdio) as fast as the UART takes it, and exits when
   # the firmware makes the semihosting exit call after SHUTDOWN. TIMEOUT is a safety net only.
   if(NOT DEFINED MACHINE)
@@ -286,8 +262,7 @@ elseif(MODE STREQUAL "qemu")
   set(cmd ${QEMU} -M ${MACHINE} -nodefaults -display none -nic none
       -semihosting-config enable=on,target=native -icount shift=0 -serial stdio -kernel ${ELF})
   string(REPLACE ";" " " shown "${cmd}")
-  get_filename_component(input_name ${input} NAME)
-  message(STATUS "${shown} < ${input_name} > uart.bin")
+  message(STATUS "${shown} < input.bin > uart.bin")
   string(TIMESTAMP t0 "%s")
   execute_process(COMMAND ${cmd} INPUT_FILE ${input} OUTPUT_FILE ${WORK_DIR}/uart.bin
                   ERROR_VARIABLE err RESULT_VARIABLE rc TIMEOUT ${TIMEOUT})
@@ -296,95 +271,18 @@ elseif(MODE STREQUAL "qemu")
   if(NOT rc STREQUAL "0")
     message(FATAL_ERROR "qemu exited with '${rc}' (expected 0) after ${secs} s\n${err}")
   endif()
-  # The UART output: COBS frames, each ended by 0x00. Decode each; check version and length.
-  file(READ ${WORK_DIR}/uart.bin hex HEX)
-  string(LENGTH "${hex}" hn)
-  set(body "")
-  set(types "")
-  set(stats "")
-  set(i 0)
-  while(i LESS hn)  # one pass over the output bytes
-    string(SUBSTRING "${hex}" ${i} 2 hh)
-    math(EXPR i "${i} + 2")
-    if(NOT hh STREQUAL "00")
-      math(EXPR b "0x${hh}")
-      list(APPEND body ${b})
-      continue()
-    endif()
-    list(LENGTH body bn)
-    set(frame "")
-    set(pos 0)
-    while(pos LESS bn)  # COBS: a code byte, code - 1 data bytes, then a zero unless code is 255
-      list(GET body ${pos} code)
-      math(EXPR pos "${pos} + 1")
-      math(EXPR end "${pos} + ${code} - 1")
-      if(end GREATER bn OR code EQUAL 0)
-        message(FATAL_ERROR "a malformed COBS block in the firmware's output")
-      endif()
-      while(pos LESS end)
-        list(GET body ${pos} x)
-        list(APPEND frame ${x})
-        math(EXPR pos "${pos} + 1")
-      endwhile()
-      if(code LESS 255 AND pos LESS bn)
-        list(APPEND frame 0)
-      endif()
-    endwhile()
-    set(body "")
-    list(LENGTH frame fn)
-    if(fn LESS 12)
-      message(FATAL_ERROR "a frame of ${fn} bytes in the firmware's output")
-    endif()
-    list(GET frame 0 ver)
-    list(GET frame 2 type)
-    list(GET frame 6 len_lo)
-    list(GET frame 7 len_hi)
-    math(EXPR want "12 + ${len_lo} + 256 * ${len_hi}")
-    if(NOT ver EQUAL 1 OR NOT fn EQUAL want)
-      message(FATAL_ERROR "a bad frame in the firmware's output (version ${ver}, ${fn} bytes, header says ${want})")
-    endif()
-    math(EXPR th "${type}" OUTPUT_FORMAT HEXADECIMAL)
-    string(REGEX REPLACE "^0x" "" th "${th}")
-    string(LENGTH "${th}" tl)
-    if(tl EQUAL 1)
-      set(th "0${th}")
-    endif()
-    list(APPEND types ${th})
-    if(th STREQUAL "31")  # STATS: 17 u32, little-endian
-      set(stats "")
-      foreach(k RANGE 16)
-        math(EXPR o "8 + 4 * ${k}")
-        set(v 0)
-        foreach(j 3 2 1 0)
-          math(EXPR oj "${o} + ${j}")
-          list(GET frame ${oj} x)
-          math(EXPR v "${v} * 256 + ${x}")
-        endforeach()
-        list(APPEND stats ${v})
-      endforeach()
-    endif()
-  endwhile()
-  string(REPLACE ";" " " types_s "${types}")
-  string(REPLACE ";" " " expected_s "${expected}")
-  message(STATUS "qemu exited with 0 after ${secs} s; ${count} bytes in, replies: ${types_s}")
-  if(NOT types_s STREQUAL expected_s)
-    message(FATAL_ERROR "replies differ from the session's\n  expected: ${expected_s}\n  got:      ${types_s}")
+  message(STATUS "qemu exited with 0 after ${secs} s")
+  # Every reply a valid frame and message, the reply types the session's, the stack within MAX_STACK.
+  set(stack_arg "")
+  if(DEFINED MAX_STACK)
+    set(stack_arg --max-stack ${MAX_STACK})
   endif()
-  if(stats)
-    set(names frames_ok bad_crc bad_length overrun unknown_type bad_version bad_flags invalid_field
-        budget_hits scans instr_predict instr_predict_local instr_associate instr_update
-        instr_augment_review instr_step stack_high_water_bytes)
-    set(report "STATS from the device:")
-    foreach(k RANGE 16)
-      list(GET names ${k} nm)
-      list(GET stats ${k} v)
-      string(APPEND report "\n  ${nm} = ${v}")
-    endforeach()
-    message(STATUS "${report}")
-    list(GET stats 16 hw)
-    if(DEFINED MAX_STACK AND hw GREATER MAX_STACK)
-      message(FATAL_ERROR "stack high-water mark ${hw} B exceeds ${MAX_STACK} B")
-    endif()
+  execute_process(COMMAND ${UART_CHECK} --session ${INPUT} --output ${WORK_DIR}/uart.bin ${stack_arg}
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  string(STRIP "${out}" out)
+  message(STATUS "${out}")
+  if(NOT rc STREQUAL "0")
+    message(FATAL_ERROR "${err}")
   endif()
 else()
   message(FATAL_ERROR "unknown MODE '${MODE}'")

@@ -239,7 +239,6 @@ struct DesktopDevice::Impl {
 };
 
 DesktopDevice::DesktopDevice(std::uint32_t boot_id) : impl_(std::make_unique<Impl>()) {
-  static_assert(DesktopBounds::kMaxObservations == static_cast<int>(kLinkMaxObs), "one batch size on the link");
   impl_->shutdown = &shutdown_;
   impl_->node.start(node::Output{impl_.get(),
                                  [](void* ctx, const std::uint8_t* p, std::size_t n) {

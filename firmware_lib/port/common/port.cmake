@@ -48,6 +48,8 @@ if(NOT GEOJCBB_QEMU_ARM)
 endif()
 set(GEOJCBB_QEMU_HARNESS ${PROJECT_SOURCE_DIR}/build/host-release/host_tools/geojcbb_qemu CACHE FILEPATH
     "geojcbb_qemu, the host side of the end-to-end QEMU tests")
+set(GEOJCBB_UART_CHECK ${PROJECT_SOURCE_DIR}/build/host-release/host_tools/geojcbb_uart_check CACHE FILEPATH
+    "geojcbb_uart_check (host-release), the host side of the QEMU smoke tests")
 
 # geojcbb_port_firmware_tests(PREFIX name ELF target BOARD lib MACHINE qemu-machine ISR regex STACK bytes
 #                             SESSION hexfile [LEAD_DELIMITERS n])
@@ -78,5 +80,6 @@ function(geojcbb_port_firmware_tests)
   add_test(NAME ${T_PREFIX}.qemu_smoke
     COMMAND ${CMAKE_COMMAND} -DQEMU=${GEOJCBB_QEMU_ARM} -DMACHINE=${T_MACHINE} -DELF=$<TARGET_FILE:${T_ELF}>
             -DINPUT=${T_SESSION} -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/smoke_${T_ELF}
-            -DTIMEOUT=120 -DMAX_STACK=${T_STACK} -DLEAD_DELIMITERS=${T_LEAD_DELIMITERS} -DMODE=qemu -P ${check})
+            -DTIMEOUT=120 -DMAX_STACK=${T_STACK} -DLEAD_DELIMITERS=${T_LEAD_DELIMITERS}
+            -DUART_CHECK=${GEOJCBB_UART_CHECK} -DMODE=qemu -P ${check})
 endfunction()

@@ -27,6 +27,37 @@
 
 namespace geojcbb::node {
 
+// The wire (protocol/, standard library only) restates a few firmware definitions; here both are
+// visible, so they are held equal at compile time.
+namespace wire_agreement {
+constexpr bool same_strategies() {
+  using S = geojcbb::Strategy;
+  using C = proto::StrategyCode;
+  return static_cast<int>(proto::kStrategyCodeCount) == kStrategyCount &&
+         static_cast<int>(S::kIcnn) == static_cast<int>(C::kIcnn) &&
+         static_cast<int>(S::kJcbb) == static_cast<int>(C::kJcbb) &&
+         static_cast<int>(S::kKjcbb) == static_cast<int>(C::kKjcbb) &&
+         static_cast<int>(S::kDfjcbb) == static_cast<int>(C::kDfjcbb) &&
+         static_cast<int>(S::kGemjcbb) == static_cast<int>(C::kGemjcbb) &&
+         static_cast<int>(S::kGeojcbb) == static_cast<int>(C::kGeojcbb);
+}
+constexpr bool same_outcomes() {
+  using P = proto::PairingOutcome;
+  return static_cast<int>(Outcome::kPaired) == static_cast<int>(P::kPaired) &&
+         static_cast<int>(Outcome::kNewLandmark) == static_cast<int>(P::kNewLandmark) &&
+         static_cast<int>(Outcome::kNewDropped) == static_cast<int>(P::kNewDropped) &&
+         static_cast<int>(Outcome::kUnmatched) == static_cast<int>(P::kUnmatched) &&
+         static_cast<int>(Outcome::kNotAugmented) == static_cast<int>(P::kNotAugmented) &&
+         static_cast<int>(Outcome::kNotAugmented) == static_cast<int>(proto::kMaxPairingOutcome);
+}
+}  // namespace wire_agreement
+static_assert(wire_agreement::same_strategies(), "geojcbb::Strategy and CONFIG's strategy code, value for value");
+static_assert(wire_agreement::same_outcomes(), "node::Outcome and ASSOC_RESULT's outcome, value for value");
+static_assert(kNewFeature == proto::kFeatureNew && kUnmatched == proto::kFeatureUnmatched,
+              "ASSOC_RESULT's feature ids NEW and UNMATCHED are the association's");
+static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
+              "the wire's default batch size is DefaultBounds' observations per scan");
+
 /// The board's output: writes n bytes (blocking or buffered; the Node does not retry), and an
 /// optional shutdown hook, called after the ACK of a SHUTDOWN has been written (nullptr: SHUTDOWN is
 /// only acknowledged). Both get `context`.
@@ -136,14 +167,12 @@ class Node {
   const SlamStep<T, B>& slam_step() const { return step_; }
 
  private:
-  // Decodes a frame's payload into `m` and validates it. Unlike proto::dispatch (which keeps a copy
-  // of every message type on the stack, 1.4 KB on the Cortex-M4F), large messages are read into a
-  // member scratch: the stack stays small and a rejected payload is simply not used.
+  // Decodes a frame's payload into `m` and validates it, in place (decode() would copy through a
+  // temporary): large messages are read into a member scratch, so the stack stays small and a
+  // rejected payload is simply not used.
   template <class M>
   static proto::Error take(const proto::FrameView& f, M& m) {
-    if (f.payload == nullptr && f.len > 0) return proto::Error::kBadLength;
-    const proto::Error e = m.read(f.payload, f.len);
-    return e != proto::Error::kOk ? e : m.validate();
+    return m.decode_in_place(f.payload, f.len);
   }
   template <class M>
   proto::Error serve(const proto::FrameView& f) {

@@ -26,9 +26,12 @@
 
 namespace geojcbb::host {
 
-/// The desktop device's capacity: the controller's observations per scan, a larger map.
-using DesktopBounds = Bounds<24, 64, 5, 20000, 200>;
-constexpr std::size_t kLinkMaxObs = 24;
+/// The desktop device's capacity: the large firmware configuration's (the controller's observations
+/// per scan, a larger map), so the desktop loop and the large Cortex-M4F firmware are the same node.
+using DesktopBounds = LargeControllerBounds;
+/// Observations per batch on the link: the wire's default batch size, which is the device's.
+constexpr std::size_t kLinkMaxObs = proto::kDefaultMaxObsPerBatch;
+static_assert(static_cast<std::size_t>(DesktopBounds::kMaxObservations) == kLinkMaxObs, "one batch size on the link");
 using LinkObsBatch = proto::ObsBatchT<kLinkMaxObs>;
 using LinkAssocResult = proto::AssocResultT<kLinkMaxObs>;
 

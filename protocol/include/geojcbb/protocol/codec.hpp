@@ -71,36 +71,31 @@ struct MessageCounters {
   }
 };
 
+namespace detail {
+/// Decodes f as M into a local and calls the visitor with it (a function per type, so each message's
+/// temporary lives in its own frame, not all of them in the caller's).
+template <class M, class Visitor>
+[[nodiscard]] Error visit_as(const FrameView& f, Visitor& visitor) {
+  M msg{};
+  const Error e = msg.decode(f.payload, f.len);
+  if (e == Error::kOk) visitor(static_cast<const M&>(msg));
+  return e;
+}
+template <class Visitor, class... M>
+[[nodiscard]] Error dispatch_over(const FrameView& f, Visitor& visitor, MessageList<M...>) {
+  Error e = Error::kUnknownType;
+  (void)((f.type == static_cast<std::uint8_t>(M::kType) && ((e = visit_as<M>(f, visitor)), true)) || ...);
+  return e;
+}
+}  // namespace detail
+
 /// Decodes a frame of any known type and calls visitor(const Msg&) with it. The visitor must accept
 /// every message type (a generic lambda does). Nothing is called on error.
 /// @tparam MaxObs  capacity of OBS_BATCH and ASSOC_RESULT on this side of the link
 /// @return kOk; kUnknownType; the message's decode error.
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch, class Visitor>
 [[nodiscard]] Error dispatch(const FrameView& f, Visitor&& visitor) {
-  auto run = [&](auto msg) -> Error {  // msg: a value-initialised message of the frame's type
-    const Error e = msg.decode(f.payload, f.len);
-    if (e == Error::kOk) visitor(static_cast<const decltype(msg)&>(msg));
-    return e;
-  };
-  switch (static_cast<MsgType>(f.type)) {
-    case MsgType::kHello: return run(Hello{});
-    case MsgType::kCapabilities: return run(Capabilities{});
-    case MsgType::kConfig: return run(Config{});
-    case MsgType::kAck: return run(Ack{});
-    case MsgType::kNack: return run(Nack{});
-    case MsgType::kPing: return run(Ping{});
-    case MsgType::kPong: return run(Pong{});
-    case MsgType::kReset: return run(Reset{});
-    case MsgType::kShutdown: return run(Shutdown{});
-    case MsgType::kOdometry: return run(Odometry{});
-    case MsgType::kObsBatch: return run(ObsBatchT<MaxObs>{});
-    case MsgType::kAssocResult: return run(AssocResultT<MaxObs>{});
-    case MsgType::kPose: return run(Pose{});
-    case MsgType::kStatsRequest: return run(StatsRequest{});
-    case MsgType::kStats: return run(Stats{});
-    case MsgType::kError: return run(ErrorReport{});
-  }
-  return Error::kUnknownType;
+  return detail::dispatch_over(f, visitor, AllMessages<MaxObs>{});
 }
 
 }  // namespace geojcbb::proto
