@@ -3,6 +3,9 @@
 // view; bad scenario files are reported with their path.
 #include <doctest/doctest.h>
 
+#include <filesystem>
+#include <random>
+
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -86,10 +89,15 @@ TEST_CASE("odometry noise, sensor limits and clutter follow the scenario") {
 }
 
 TEST_CASE("a bad scenario file is reported with its path") {
-  const std::string p = "bad_scenario.json";
+  // Only in a fresh temporary directory: tests never write into the working directory.
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("geojcbb_test_sim_" + std::to_string(std::random_device{}()));
+  std::filesystem::create_directories(dir);
+  const std::string p = (dir / "bad_scenario.json").string();
   std::ofstream(p) << R"({"landmarks": [[0, 0]], "waypoints": [[0, 0]]})";
   CHECK_THROWS_WITH_AS(load_scenario(p), doctest::Contains("bad_scenario.json"), std::runtime_error);
   std::ofstream(p) << R"({"landmarks": [[0, 0]], "waypoints": [[0, 0], [1, 1]], "dt_s": -1})";
   CHECK_THROWS_AS(load_scenario(p), std::runtime_error);
-  CHECK_THROWS_AS(load_scenario("no_such_file.json"), std::runtime_error);
+  CHECK_THROWS_AS(load_scenario((dir / "no_such_file.json").string()), std::runtime_error);
+  std::filesystem::remove_all(dir);
 }
