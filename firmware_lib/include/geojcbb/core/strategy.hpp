@@ -6,16 +6,23 @@
 //   DFJCBB   no            DBSCAN    no                no
 //   GEMJCBB  yes           GMM-EM    no                no
 //   GEOJCBB  yes           GMM-EM    yes               yes
+//   PCJCBB   no            none      yes               yes   + verify + seed (ours, issue 12)
 // The joint re-check of merged hypotheses (our addition) is on by default in the grouped presets;
-// StrategyParams switches it off to reproduce the papers' methods exactly.
+// StrategyParams switches it off to reproduce the papers' methods exactly. PCJCBB ("pairwise
+// consistent JCBB") is not a paper's method: JCBB with exclusion and the optimal criterion, whose
+// answer is verified pairwise and which is seeded by the pose-free clique when the pose is
+// uncertain (docs/consistency.md). The verification can be switched into every other preset
+// (StrategyParams::verify).
 #pragma once
 
 #include "geojcbb/core/association_config.hpp"
 
 namespace geojcbb {
 
-enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb };
-constexpr int kStrategyCount = 6;
+enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb, kPcjcbb };
+constexpr int kStrategyCount = 7;
+/// The papers' six (ICNN .. GEOJCBB); the wire protocol's strategy codes cover these only.
+constexpr int kPaperStrategyCount = 6;
 
 constexpr const char* to_string(Strategy s) {
   switch (s) {
@@ -25,6 +32,7 @@ constexpr const char* to_string(Strategy s) {
     case Strategy::kDfjcbb: return "DFJCBB";
     case Strategy::kGemjcbb: return "GEMJCBB";
     case Strategy::kGeojcbb: return "GEOJCBB";
+    case Strategy::kPcjcbb: return "PCJCBB";
   }
   return "?";
 }
@@ -41,6 +49,11 @@ struct StrategyParams {
   int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
   double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
+  bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
+  /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
+  T seed_min_position_var_m2 = T(4);
+  double consistency_wide_confidence = 0.99999;  ///< the consistency graph's wide gate (2 dof)
+  double consistency_pair_confidence = 0.999;    ///< its pairwise distance test (1 dof)
 };
 
 /// Builds a strategy's configuration.
@@ -62,8 +75,14 @@ template <typename T, class B>
   c.local_region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
   if (c.local_region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
   c.local_radius_m = p.local_radius_m;
-  c.mutual_exclusion = s == Strategy::kGeojcbb;
-  c.optimal_criterion = s == Strategy::kGeojcbb;
+  c.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  c.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  c.verify = p.verify || s == Strategy::kPcjcbb;
+  c.seed = s == Strategy::kPcjcbb;
+  if (!(p.seed_min_position_var_m2 > T(0))) return Status::kInvalidInput;
+  c.seed_min_position_var_m2 = p.seed_min_position_var_m2;
+  const Status cs = c.consistency.set_confidence(p.consistency_wide_confidence, p.consistency_pair_confidence);
+  if (cs != Status::kOk) return cs;
   c.groups = p.groups == 0 && c.grouping != Grouping::kGmmEm ? 3 : p.groups;
   c.dbscan_eps_m = p.dbscan_eps_m;
   c.dbscan_min_points = p.dbscan_min_points;

@@ -1,0 +1,237 @@
+// The consistency stage inside associate() (issue 12): verify drops the pairings of JCBB's answer
+// that are not pairwise consistent (a constructed loop closure where JCBB alone takes a wrong
+// hypothesis); seed uses the pose-free clique when the pose is uncertain (a constructed
+// relocalisation) and is not tried otherwise; the PCJCBB preset; bad options give a status and
+// leave the output untouched.
+#include <doctest/doctest.h>
+
+#include <limits>
+#include <memory>
+
+#include "support/consistency_scene.hpp"
+#include "support/helpers.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::test;
+
+namespace {
+
+using B = DefaultBounds;
+
+template <typename T>
+std::unique_ptr<Problem<T, B>> problem_of(const host::Scene& s) {
+  auto p = make_problem<T, B>();
+  REQUIRE(host::to_inputs(s, p->obs, p->pred));
+  return p;
+}
+
+/// Plain JCBB (the paper's: no exclusion, no optimal criterion), optionally verified.
+template <typename T>
+AssociationConfig<T, B> jcbb_config(bool verify) {
+  auto cfg = make_config<T, B>(SearchMethod::kJcbb, false, false);
+  REQUIRE(cfg.consistency.set_confidence(0.99999, 0.999) == Status::kOk);
+  cfg.verify = verify;
+  return cfg;
+}
+
+template <typename T>
+AssociationConfig<T, B> pcjcbb_config() {
+  AssociationConfig<T, B> cfg;
+  REQUIRE(make_strategy(Strategy::kPcjcbb, StrategyParams<T>{}, cfg) == Status::kOk);
+  return cfg;
+}
+
+/// wrong_pose_scene() after a long drift: the pose estimate 2.5 m and 0.8 rad off, and the filter
+/// overconfident (pose standard deviations 0.25 m and 0.1 rad, ten times too small), as at a loop
+/// closure.
+host::Scene loop_closure_scene() {
+  host::Scene s = wrong_pose_scene();
+  s.P.topLeftCorner<3, 3>() = Eigen::Vector3d(0.25 * 0.25, 0.25 * 0.25, 0.01).asDiagonal();
+  host::predict_measurements(s);
+  return s;
+}
+
+int right_pairings(const host::Scene& s, const std::array<std::int16_t, B::kMaxObservations>& c, int m) {
+  int n = 0;
+  for (int i = 0; i < m; ++i) n += s.truth[i] >= 0 && c[i] == s.truth[i];
+  return n;
+}
+int wrong_pairings(const host::Scene& s, const std::array<std::int16_t, B::kMaxObservations>& c, int m) {
+  int n = 0;
+  for (int i = 0; i < m; ++i) n += c[i] >= 0 && c[i] != s.truth[i];
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("verify: at a constructed loop closure JCBB pairs wrongly and verification drops it", T, float,
+                   double) {
+  const host::Scene s = loop_closure_scene();
+  auto plain = problem_of<T>(s);
+  REQUIRE(associate(plain->obs, plain->pred, jcbb_config<T>(false), plain->ws, plain->out) == Status::kOk);
+  const int m = plain->obs.count;
+  // Precondition of the construction: JCBB alone takes a jointly compatible wrong hypothesis.
+  REQUIRE(wrong_pairings(s, plain->out.candidate, m) > 0);
+  CHECK(plain->out.jointly_compatible);
+  CHECK(plain->out.diag.verify_dropped == 0);
+
+  auto verified = problem_of<T>(s);
+  REQUIRE(associate(verified->obs, verified->pred, jcbb_config<T>(true), verified->ws, verified->out) == Status::kOk);
+  MESSAGE("JCBB: " << plain->out.pairings << " pairings, " << wrong_pairings(s, plain->out.candidate, m)
+                   << " wrong; verified: " << verified->out.pairings << " pairings, "
+                   << wrong_pairings(s, verified->out.candidate, m) << " wrong, "
+                   << verified->out.diag.verify_dropped << " dropped");
+  // Verification only removes pairings, and it removes every wrong one here.
+  CHECK(verified->out.diag.verify_dropped > 0);
+  CHECK(verified->out.pairings == plain->out.pairings - verified->out.diag.verify_dropped);
+  CHECK(wrong_pairings(s, verified->out.candidate, m) == 0);
+  for (int i = 0; i < m; ++i) {
+    if (verified->out.candidate[i] >= 0) CHECK(verified->out.candidate[i] == plain->out.candidate[i]);
+    // A dropped pairing leaves its observation neither paired nor new.
+    if (plain->out.candidate[i] >= 0 && verified->out.candidate[i] < 0) CHECK(verified->out.feature[i] == kUnmatched);
+  }
+  CHECK(verified->out.diag.clique_graph_nodes == plain->out.pairings);
+  CHECK_FALSE(verified->out.diag.clique_budget_hit);
+  CHECK_FALSE(verified->out.diag.seed_tried);
+}
+
+TEST_CASE_TEMPLATE("verify: a consistent answer is kept whole", T, float, double) {
+  // Generated scenes with a small, admitted pose error: where JCBB's answer is all correct, the
+  // verified answer is the same.
+  int compared = 0;
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 14, 0.3, 0.03), seed);
+    auto a = problem_of<T>(s);
+    auto b = problem_of<T>(s);
+    REQUIRE(associate(a->obs, a->pred, jcbb_config<T>(false), a->ws, a->out) == Status::kOk);
+    if (wrong_pairings(s, a->out.candidate, a->obs.count) > 0) continue;
+    REQUIRE(associate(b->obs, b->pred, jcbb_config<T>(true), b->ws, b->out) == Status::kOk);
+    CAPTURE(seed);
+    CHECK(b->out.diag.verify_dropped == 0);
+    for (int i = 0; i < a->obs.count; ++i) CHECK(b->out.candidate[i] == a->out.candidate[i]);
+    CHECK(b->out.joint_d2 == a->out.joint_d2);
+    ++compared;
+  }
+  CHECK(compared >= 20);
+}
+
+TEST_CASE_TEMPLATE("seed: a constructed relocalisation is found from the pose-free clique", T, float, double) {
+  const host::Scene s = wrong_pose_scene();  // pose 2.5 m, 0.8 rad off; its covariance admits it
+  auto p = problem_of<T>(s);
+  const auto cfg = pcjcbb_config<T>();
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.diag.seed_tried);
+  CHECK(p->out.diag.seed_used);
+  CHECK(p->out.diag.seed_pairings == 7);
+  CHECK(p->out.jointly_compatible);
+  for (int i = 0; i < p->obs.count; ++i) CHECK(p->out.candidate[i] == s.truth[i]);
+  // JCBB with the same switches but no seed (for information).
+  auto q = problem_of<T>(s);
+  auto unseeded = cfg;
+  unseeded.seed = false;
+  REQUIRE(associate(q->obs, q->pred, unseeded, q->ws, q->out) == Status::kOk);
+  MESSAGE("unseeded: " << right_pairings(s, q->out.candidate, q->obs.count) << " of 7 right, "
+                       << wrong_pairings(s, q->out.candidate, q->obs.count) << " wrong");
+}
+
+TEST_CASE_TEMPLATE("seed: not tried when the pose is certain; PCJCBB is then JCBB + exclusion + optimal + verify", T,
+                   float, double) {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 14, 0.3, 0.03), seed);
+    auto a = problem_of<T>(s);
+    auto b = problem_of<T>(s);
+    const auto cfg = pcjcbb_config<T>();
+    auto plain = make_config<T, B>(SearchMethod::kJcbb, true, true);
+    plain.verify = true;
+    plain.consistency = cfg.consistency;
+    REQUIRE(associate(a->obs, a->pred, cfg, a->ws, a->out) == Status::kOk);
+    REQUIRE(associate(b->obs, b->pred, plain, b->ws, b->out) == Status::kOk);
+    CAPTURE(seed);
+    CHECK_FALSE(a->out.diag.seed_tried);
+    for (int i = 0; i < a->obs.count; ++i) CHECK(a->out.candidate[i] == b->out.candidate[i]);
+  }
+}
+
+TEST_CASE_TEMPLATE("seed and verify: bad options and input give a status and leave the output untouched", T, float,
+                   double) {
+  const host::Scene s = wrong_pose_scene();
+  auto p = problem_of<T>(s);
+  auto expect = [&](const AssociationConfig<T, B>& cfg, Status want) {
+    p->out.count = 99;
+    p->out.pairings = 77;
+    p->out.diag.verify_dropped = 55;
+    CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == want);
+    CHECK(p->out.count == 99);
+    CHECK(p->out.pairings == 77);
+    CHECK(p->out.diag.verify_dropped == 55);
+  };
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  {
+    auto cfg = jcbb_config<T>(true);
+    cfg.consistency.pair_d2 = nan;  // verify needs the pairwise gate
+    expect(cfg, Status::kInvalidInput);
+    cfg.verify = false;  // unused options are not checked
+    CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  }
+  {
+    auto cfg = pcjcbb_config<T>();
+    cfg.consistency.node_budget = kMaxCliqueSearchNodes + 1;
+    expect(cfg, Status::kInvalidInput);
+  }
+  {
+    auto cfg = pcjcbb_config<T>();
+    cfg.seed_min_position_var_m2 = T(0);
+    expect(cfg, Status::kInvalidInput);
+    cfg.seed_min_position_var_m2 = nan;
+    expect(cfg, Status::kInvalidInput);
+  }
+  {
+    auto cfg = pcjcbb_config<T>();
+    cfg.seed_min_pairings = 1;
+    expect(cfg, Status::kInvalidInput);
+  }
+  {
+    auto cfg = pcjcbb_config<T>();
+    cfg.search = SearchMethod::kIcnn;  // the seed extends a JCBB search
+    expect(cfg, Status::kInvalidInput);
+  }
+  {
+    StrategyParams<T> sp;
+    sp.seed_min_position_var_m2 = T(-1);
+    AssociationConfig<T, B> cfg;
+    CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
+    sp = StrategyParams<T>{};
+    sp.consistency_pair_confidence = 1.5;
+    CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
+  }
+  {
+    const auto cfg = pcjcbb_config<T>();
+    p->obs.z[1].y() = nan;
+    expect(cfg, Status::kNonFinite);
+  }
+}
+
+TEST_CASE("PCJCBB: its name and its switches") {
+  CHECK(std::string(to_string(Strategy::kPcjcbb)) == "PCJCBB");
+  AssociationConfig<double, B> cfg;
+  REQUIRE(make_strategy(Strategy::kPcjcbb, StrategyParams<double>{}, cfg) == Status::kOk);
+  CHECK(cfg.search == SearchMethod::kJcbb);
+  CHECK(cfg.grouping == Grouping::kNone);
+  CHECK(cfg.mutual_exclusion);
+  CHECK(cfg.optimal_criterion);
+  CHECK(cfg.verify);
+  CHECK(cfg.seed);
+  CHECK_FALSE(cfg.local_region);
+  // The papers' presets are unchanged unless the verification is asked for.
+  for (int k = 0; k < kPaperStrategyCount; ++k) {
+    StrategyParams<double> sp;
+    sp.local_radius_m = 10;
+    REQUIRE(make_strategy(static_cast<Strategy>(k), sp, cfg) == Status::kOk);
+    CHECK_FALSE(cfg.verify);
+    CHECK_FALSE(cfg.seed);
+    sp.verify = true;
+    REQUIRE(make_strategy(static_cast<Strategy>(k), sp, cfg) == Status::kOk);
+    CHECK(cfg.verify);
+    CHECK_FALSE(cfg.seed);
+  }
+}
