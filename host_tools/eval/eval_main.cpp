@@ -216,7 +216,11 @@ int run_sim(const SimOptions& o) {
       row << csv_escape(scenarios[jb.sc].name) << ',' << strategies[jb.st].name() << ',' << seed << ',' << r.scans
           << ',' << r.observations << ',' << r.score.tp << ',' << r.score.tn << ',' << r.score.fp << ',' << r.score.fn
           << ',' << r.score.f1() << ',' << r.association_s << ',' << run_s << ',' << r.mean_abs_x_m << ','
-          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits;
+          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits << ','
+          << (scenarios[jb.sc].kidnap_t_s > 0 ? relocalised_at(r, scenarios[jb.sc].kidnap_t_s) : -1);
+      double nees = 0;
+      for (const StepRecord& k : r.steps) nees += k.pose_nees;
+      row << ',' << (r.steps.empty() ? 0.0 : nees / static_cast<double>(r.steps.size()));
       csv_rows[j] = row.str();
       if (jb.run == 0) {
         c.first = std::move(r);
@@ -387,7 +391,7 @@ int run_sim(const SimOptions& o) {
     std::ofstream csv(o.out_dir + "/runs.csv");
     csv << "scenario,strategy,seed,scans,observations,tp,tn,fp,fn,f1,"
            "association_s,run_s,mean_abs_x_m,mean_abs_y_m,"
-           "landmarks,spurious_in_map,budget_hits\n";
+           "landmarks,spurious_in_map,budget_hits,relocalised_at_scan,anees\n";
     for (const std::string& r : csv_rows)
       if (!r.empty()) csv << r << '\n';
     std::ofstream(o.out_dir + "/summary.json") << js.dump(2) << '\n';

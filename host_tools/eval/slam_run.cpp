@@ -286,17 +286,19 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
   res.steps.back().assoc_s = assoc_s;
 }
 
-int relocalised_at(const RunResult& r, double kidnap_t_s) {
+int relocalised_at(const RunResult& r, double kidnap_t_s, int window) {
   int first = -1;  // index into r.steps of the first scan after the kidnap
   for (std::size_t k = 0; k < r.steps.size() && first < 0; ++k)
     if (r.steps[k].t_s >= kidnap_t_s) first = static_cast<int>(k);
   if (first < 0) return 0;
-  int found = 0;  // scanning backwards: the earliest scan after which no pairing is false
-  for (int k = static_cast<int>(r.steps.size()) - 1; k >= first; --k) {
-    if (r.steps[static_cast<std::size_t>(k)].fp > 0) break;
-    if (r.steps[static_cast<std::size_t>(k)].tp >= 2) found = k - first + 1;
+  const int n = static_cast<int>(r.steps.size());
+  for (int k = first; k < n; ++k) {  // the earliest scan that pairs >= 2 correctly, then no false pair
+    if (r.steps[static_cast<std::size_t>(k)].tp < 2) continue;
+    bool clean = true;
+    for (int q = k; q < n && q < k + window && clean; ++q) clean = r.steps[static_cast<std::size_t>(q)].fp == 0;
+    if (clean) return k - first + 1;
   }
-  return found;
+  return 0;
 }
 
 RunResult SlamSession::finish() {

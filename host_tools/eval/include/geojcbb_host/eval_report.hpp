@@ -108,7 +108,8 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f) {
   bool kidnap = false;
   for (const ReportRow& r : rows) kidnap = kidnap || r.reloc_runs > 0;
   if (kidnap) {
-    std::fprintf(f, "Relocalisation: runs whose every pairing from scan <= 3 after the kidnap on is correct\n");
+    std::fprintf(f, "Relocalisation: runs found within 3 scans of the kidnap (a scan with >= 2 correct pairings, then 10 "
+                 "scans without a false pairing)\n");
     for (const ReportRow& r : rows) {
       if (r.reloc_runs > 0)
         std::fprintf(f, "  %-9s %4d / %4d (%5.1f%%)\n", r.name.c_str(), r.reloc_found3, r.reloc_runs,
