@@ -41,13 +41,33 @@ AssociationConfig<T, B> pcjcbb_config() {
   return cfg;
 }
 
-/// wrong_pose_scene() after a long drift: the pose estimate 2.5 m and 0.8 rad off, and the filter
-/// overconfident (pose standard deviations 0.25 m and 0.1 rad, ten times too small), as at a loop
-/// closure.
+/// A constructed loop closure: the robot back among eight old landmarks, its estimate 0.64 m and
+/// 0.02 rad off with a pose covariance that admits it (1 m, 0.05 rad), the landmarks known to 0.2 m.
+/// A ninth old landmark (6, 0) is not seen, but a clutter return lies 1.2 m beyond it. Individually
+/// the return is compatible with it (the pose's share of C dominates); jointly the eight true
+/// pairings pin the pose and the extra pairing adds about 26 to the joint d2, still under
+/// chi2(0.99, 18) = 34.8 because one bad pairing is diluted over 18 dof. JCBB maximises pairings and
+/// takes it. Its distances to the landmarks in line with the offset are 1.2 m off, with a standard
+/// deviation of about 0.3 m: not pairwise consistent. Noise-free measurements.
 host::Scene loop_closure_scene() {
-  host::Scene s = wrong_pose_scene();
-  s.P.topLeftCorner<3, 3>() = Eigen::Vector3d(0.25 * 0.25, 0.25 * 0.25, 0.01).asDiagonal();
+  host::Scene s;
+  s.true_pose = {0, 0, 0};
+  s.est_pose = {0.5, -0.4, 0.02};
+  s.true_landmarks = {{2.5, 0.6}, {3.2, -1.1}, {9.6, 0.9},  {10.4, -0.7}, {5.0, 4.5},
+                      {7.5, -4.2}, {4.0, -3.0}, {8.5, 3.5}, {6.0, 0.0}};
+  const int n = static_cast<int>(s.true_landmarks.size());
+  s.est_landmarks = s.true_landmarks;
+  s.P = Eigen::MatrixXd::Zero(3 + 2 * n, 3 + 2 * n);
+  s.P.topLeftCorner<3, 3>() = Eigen::Vector3d(1.0, 1.0, 0.05 * 0.05).asDiagonal();
+  s.P.bottomRightCorner(2 * n, 2 * n).diagonal().setConstant(0.2 * 0.2);
   host::predict_measurements(s);
+  s.R = Eigen::Vector2d(0.1 * 0.1, 0.01 * 0.01).asDiagonal();
+  for (int j = 0; j < n - 1; ++j) {  // landmark 8 missed
+    s.z.push_back(observe(s.true_pose, Vec2<double>(s.true_landmarks[j])));
+    s.truth.push_back(j);
+  }
+  s.z.push_back(observe(s.true_pose, Vec2<double>(6.0 + 1.2, 0.0)));  // the clutter return
+  s.truth.push_back(-1);
   return s;
 }
 

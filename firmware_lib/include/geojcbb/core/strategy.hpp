@@ -61,38 +61,53 @@ struct StrategyParams {
 ///         range; kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
 template <typename T, class B>
 [[nodiscard]] Status make_strategy(Strategy s, const StrategyParams<T>& p, AssociationConfig<T, B>& out) {
-  AssociationConfig<T, B> c;
-  const Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, c.gate);
+  // Every check and quantile first, into small locals; `out` is then written field by field (a whole
+  // AssociationConfig on the stack would take this frame over the controller's 512-byte limit).
+  GateThresholds<T, B::kMaxObservations> gate;
+  Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, gate);
+  if (st != Status::kOk) return st;
+  ConsistencyOptions<T> consistency;
+  st = consistency.set_confidence(p.consistency_wide_confidence, p.consistency_pair_confidence);
   if (st != Status::kOk) return st;
   if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget < 0 || p.node_budget > B::kMaxJcbbNodes) {
     return Status::kInvalidInput;
   }
-  c.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
-  c.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
-               : s == Strategy::kDfjcbb ? Grouping::kDbscan
-               : (s == Strategy::kGemjcbb || s == Strategy::kGeojcbb) ? Grouping::kGmmEm
-                                                                     : Grouping::kNone;
-  c.local_region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
-  if (c.local_region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
-  c.local_radius_m = p.local_radius_m;
-  c.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
-  c.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
-  c.verify = p.verify || s == Strategy::kPcjcbb;
-  c.seed = s == Strategy::kPcjcbb;
+  const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
+  if (region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
   if (!(p.seed_min_position_var_m2 > T(0))) return Status::kInvalidInput;
-  c.seed_min_position_var_m2 = p.seed_min_position_var_m2;
-  const Status cs = c.consistency.set_confidence(p.consistency_wide_confidence, p.consistency_pair_confidence);
-  if (cs != Status::kOk) return cs;
-  c.groups = p.groups == 0 && c.grouping != Grouping::kGmmEm ? 3 : p.groups;
-  c.dbscan_eps_m = p.dbscan_eps_m;
-  c.dbscan_min_points = p.dbscan_min_points;
-  c.joint_recheck = p.joint_recheck;
-  c.condition_groups = p.condition_groups;
-  c.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
   if (!(p.ambiguity_margin >= 0) || !(p.ambiguity_margin < 1e6)) return Status::kInvalidInput;
-  c.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
-  c.new_if_candidates_taken = p.new_if_candidates_taken;
-  out = c;
+  // The fields no preset sets get AssociationConfig's defaults, one by one (a default-constructed
+  // temporary would cost the frame as much as a local copy).
+  out.kmeans_max_iterations = kMaxKMeansIterations;
+  out.em = EmOptions<T>{};
+  out.order_fewest_candidates_first = true;
+  out.seed_min_pairings = 3;
+  out.rjc = false;
+  out.rjc_tries = 8;
+  out.rjc_subset = 8;
+  out.rjc_seed = 1;
+  out.gate = gate;
+  out.consistency = consistency;
+  out.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
+  out.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
+                 : s == Strategy::kDfjcbb ? Grouping::kDbscan
+                 : region                 ? Grouping::kGmmEm
+                                          : Grouping::kNone;
+  out.local_region = region;
+  out.local_radius_m = p.local_radius_m;
+  out.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.verify = p.verify || s == Strategy::kPcjcbb;
+  out.seed = s == Strategy::kPcjcbb;
+  out.seed_min_position_var_m2 = p.seed_min_position_var_m2;
+  out.groups = p.groups == 0 && out.grouping != Grouping::kGmmEm ? 3 : p.groups;
+  out.dbscan_eps_m = p.dbscan_eps_m;
+  out.dbscan_min_points = p.dbscan_min_points;
+  out.joint_recheck = p.joint_recheck;
+  out.condition_groups = p.condition_groups;
+  out.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
+  out.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
+  out.new_if_candidates_taken = p.new_if_candidates_taken;
   return Status::kOk;
 }
 
