@@ -221,7 +221,10 @@ TEST_CASE_TEMPLATE("seed and verify: bad options and input give a status and lea
     AssociationConfig<T, B> cfg;
     CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
     sp = StrategyParams<T>{};
-    sp.consistency_pair_confidence = 1.5;
+    sp.consistency_pair_d2 = T(-1);
+    CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
+    sp = StrategyParams<T>{};
+    sp.consistency_wide_d2 = nan;
     CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
   }
   {
@@ -242,6 +245,11 @@ TEST_CASE("PCJCBB: its name and its switches") {
   CHECK(cfg.verify);
   CHECK(cfg.seed);
   CHECK_FALSE(cfg.local_region);
+  // The preset's consistency thresholds are the chi-square quantiles they stand for.
+  ConsistencyOptions<double> ref;
+  REQUIRE(ref.set_confidence(0.99999, 0.999) == Status::kOk);
+  CHECK(cfg.consistency.wide_d2 == doctest::Approx(ref.wide_d2).epsilon(1e-6));
+  CHECK(cfg.consistency.pair_d2 == doctest::Approx(ref.pair_d2).epsilon(1e-6));
   // The papers' presets are unchanged unless the verification is asked for.
   for (int k = 0; k < kPaperStrategyCount; ++k) {
     StrategyParams<double> sp;

@@ -52,8 +52,12 @@ struct StrategyParams {
   bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
   /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
   T seed_min_position_var_m2 = T(4);
-  double consistency_wide_confidence = 0.99999;  ///< the consistency graph's wide gate (2 dof)
-  double consistency_pair_confidence = 0.999;    ///< its pairwise distance test (1 dof)
+  /// The consistency graph's wide gate, chi2inv(0.99999, 2) = -2 ln(1e-5), and its pairwise test,
+  /// chi2inv(0.999, 1), as thresholds rather than levels: a second chi2_inv inlined into
+  /// make_strategy took its frame over the controller's 512-byte limit (the values are checked
+  /// against chi2_inv in tests/firmware_lib/consistency/test_associate_consistency.cpp).
+  T consistency_wide_d2 = T(23.025850929940457);
+  T consistency_pair_d2 = T(10.827566170662733);
 };
 
 /// Builds a strategy's configuration.
@@ -67,8 +71,9 @@ template <typename T, class B>
   Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, gate);
   if (st != Status::kOk) return st;
   ConsistencyOptions<T> consistency;
-  st = consistency.set_confidence(p.consistency_wide_confidence, p.consistency_pair_confidence);
-  if (st != Status::kOk) return st;
+  consistency.wide_d2 = p.consistency_wide_d2;
+  consistency.pair_d2 = p.consistency_pair_d2;
+  if (!consistency.valid()) return Status::kInvalidInput;
   if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget < 0 || p.node_budget > B::kMaxJcbbNodes) {
     return Status::kInvalidInput;
   }
