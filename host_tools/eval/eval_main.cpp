@@ -52,6 +52,8 @@ struct Cell {
   int removed_true = 0, failed = 0;
   double assoc_s = 0, run_s = 0, abs_x = 0, abs_y = 0;
   std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
+  std::vector<double> scan_ms;                      ///< every scan's association time [ms]
+  int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
   RunResult first;                                  ///< the first seed's run, for the path figure
   bool have_first = false;
   std::string error;
@@ -96,6 +98,14 @@ void add_robustness_options(CLI::App& app, RunOptions& run) {
                  "(an object that moves; 0: off)")
       ->default_val(run.static_gate_level)
       ->check(CLI::Range(0.0, 0.999999));
+  app.add_flag("--verify", run.verify,
+               "every strategy's answer is verified pairwise (pose-free consistency, docs/consistency.md); a single "
+               "strategy can be verified by naming it with +V, e.g. JCBB+V");
+  app.add_option("--seed-min-var", run.seed_min_position_var_m2,
+                 "PCJCBB: seed with the pose-free clique when the best-placed candidate's position variance is at "
+                 "least this [m^2]")
+      ->default_val(run.seed_min_position_var_m2)
+      ->check(CLI::Range(1e-6, 1e9));
   app.add_flag("--new-if-taken,!--no-new-if-taken", run.new_if_candidates_taken,
                "with mutual exclusion, an observation whose compatible features are all taken by others is new, "
                "not unmatched");
@@ -109,12 +119,15 @@ std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool
   for (const std::string& n : names) {
     bool found = false;
     for (int k = 0; k < kStrategyCount && !found; ++k) {
-      std::string a = to_string(static_cast<Strategy>(k)), b = n;
-      std::transform(a.begin(), a.end(), a.begin(), ::tolower);
-      std::transform(b.begin(), b.end(), b.begin(), ::tolower);
-      if (a == b) {
-        out.push_back({static_cast<Strategy>(k), false});
-        found = true;
+      for (bool verify : {false, true}) {
+        const Method m{static_cast<Strategy>(k), false, verify};
+        std::string a = m.name(), b = n;
+        std::transform(a.begin(), a.end(), a.begin(), ::tolower);
+        std::transform(b.begin(), b.end(), b.begin(), ::tolower);
+        if (a == b && !found) {
+          out.push_back(m);
+          found = true;
+        }
       }
     }
     if (!found) throw std::runtime_error("unknown strategy '" + n + "'");
@@ -123,8 +136,14 @@ std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool
   return out;
 }
 
-void add_run(Cell& c, const RunResult& r, double run_s) {
+void add_run(Cell& c, const RunResult& r, double run_s, double kidnap_t_s) {
   c.score.add(r.score);
+  for (const StepRecord& k : r.steps) c.scan_ms.push_back(1e3 * k.assoc_s);
+  if (kidnap_t_s > 0) {
+    const int at = relocalised_at(r, kidnap_t_s);
+    ++c.reloc_runs;
+    c.reloc_found3 += at >= 1 && at <= 3;
+  }
   ++c.runs;
   c.scans += r.scans;
   c.observations += r.observations;
@@ -196,12 +215,16 @@ int run_sim(const SimOptions& o) {
       ++c.failed;
       c.error = err;
     } else {
-      add_run(c, r, run_s);
+      add_run(c, r, run_s, scenarios[jb.sc].kidnap_t_s);
       std::ostringstream row;
       row << csv_escape(scenarios[jb.sc].name) << ',' << strategies[jb.st].name() << ',' << seed << ',' << r.scans
           << ',' << r.observations << ',' << r.score.tp << ',' << r.score.tn << ',' << r.score.fp << ',' << r.score.fn
           << ',' << r.score.f1() << ',' << r.association_s << ',' << run_s << ',' << r.mean_abs_x_m << ','
-          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits;
+          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits << ','
+          << (scenarios[jb.sc].kidnap_t_s > 0 ? relocalised_at(r, scenarios[jb.sc].kidnap_t_s) : -1);
+      double nees = 0;
+      for (const StepRecord& k : r.steps) nees += k.pose_nees;
+      row << ',' << (r.steps.empty() ? 0.0 : nees / static_cast<double>(r.steps.size()));
       csv_rows[j] = row.str();
       if (jb.run == 0) {
         c.first = std::move(r);
@@ -238,6 +261,15 @@ int run_sim(const SimOptions& o) {
       row.assoc_s = c.assoc_s;
       row.run_s = c.run_s;
       row.budget_hits = c.budget_hits;
+      if (!c.scan_ms.empty()) {
+        std::vector<double> ms = c.scan_ms;
+        std::sort(ms.begin(), ms.end());
+        row.ms_median = ms[ms.size() / 2];
+        row.ms_p90 = ms[std::min(ms.size() - 1, ms.size() * 9 / 10)];
+        row.ms_max = ms.back();
+      }
+      row.reloc_runs = c.reloc_runs;
+      row.reloc_found3 = c.reloc_found3;
       row.abs_x = c.runs ? c.abs_x / c.runs : NAN;
       row.abs_y = c.runs ? c.abs_y / c.runs : NAN;
       row.landmarks = c.runs ? double(c.landmarks) / c.runs : NAN;
@@ -363,7 +395,7 @@ int run_sim(const SimOptions& o) {
     std::ofstream csv(o.out_dir + "/runs.csv");
     csv << "scenario,strategy,seed,scans,observations,tp,tn,fp,fn,f1,"
            "association_s,run_s,mean_abs_x_m,mean_abs_y_m,"
-           "landmarks,spurious_in_map,budget_hits\n";
+           "landmarks,spurious_in_map,budget_hits,relocalised_at_scan,anees\n";
     for (const std::string& r : csv_rows)
       if (!r.empty()) csv << r << '\n';
     std::ofstream(o.out_dir + "/summary.json") << js.dump(2) << '\n';
@@ -450,7 +482,8 @@ int main(int argc, char** argv) {
   sim->add_option("--seed", so.seed, "first seed")->default_val(1);
   sim->add_option("--strategies", so.strategies,
                   "strategies to run, comma separated "
-                  "(ICNN,JCBB,KJCBB,DFJCBB,GEMJCBB,GEOJCBB; default all)")
+                  "(ICNN,JCBB,KJCBB,DFJCBB,GEMJCBB,GEOJCBB,PCJCBB, each also with +V for the "
+                  "verification; default the seven presets)")
       ->delimiter(',');
   sim->add_option("--jobs", so.jobs,
                   "worker threads (default: the number of cores; 1 gives the "

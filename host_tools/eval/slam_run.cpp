@@ -173,6 +173,8 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   ss.params.node_budget = opt.node_budget;
   ss.params.ambiguity_margin = opt.ambiguity_margin;
   ss.params.new_if_candidates_taken = opt.new_if_candidates_taken;
+  ss.params.verify = opt.verify;
+  ss.params.seed_min_position_var_m2 = opt.seed_min_position_var_m2;
   ss.new_landmark_level = opt.new_landmark_gate;
   ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
@@ -209,6 +211,10 @@ void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
   check(st_->step.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
 }
 
+void SlamSession::relocalise(const Eigen::Matrix3d& P) {
+  check(st_->step.relocalise(st_->step.slam().pose(), P), "relocalise");
+}
+
 void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
                        const Pose2<double>* truth) {
   State& s = *st_;
@@ -231,7 +237,8 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
   } else {
     check(s.step.associate_prepared(s.obs, s.out), "associate");
   }
-  res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double assoc_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.association_s += assoc_s;
   res.budget_hits += s.out.diag.node_budget_hit;
   s.truth.clear();
   s.paired.clear();
@@ -239,7 +246,9 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
     s.truth.push_back(scan[i].truth);
     s.paired.push_back(s.out.feature[i]);
   }
+  const int tp0 = res.score.tp, fp0 = res.score.fp;
   sc.score(s.truth, s.paired);
+  const int scan_tp = res.score.tp - tp0, scan_fp = res.score.fp - fp0;
   // Update, augment and review: the device's code (node::SlamStep).
   check(s.step.commit(s.obs, s.out, s.result), "update");
   for (std::size_t i = 0; i < scan.size(); ++i) {
@@ -273,6 +282,24 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
     nis += s.out.d2[i];
   }
   sc.nis(paired, nis);
+  res.steps.back().tp = scan_tp;
+  res.steps.back().fp = scan_fp;
+  res.steps.back().assoc_s = assoc_s;
+}
+
+int relocalised_at(const RunResult& r, double kidnap_t_s, int window) {
+  int first = -1;  // index into r.steps of the first scan after the kidnap
+  for (std::size_t k = 0; k < r.steps.size() && first < 0; ++k)
+    if (r.steps[k].t_s >= kidnap_t_s) first = static_cast<int>(k);
+  if (first < 0) return 0;
+  const int n = static_cast<int>(r.steps.size());
+  for (int k = first; k < n; ++k) {  // the earliest scan that pairs >= 2 correctly, then no false pair
+    if (r.steps[static_cast<std::size_t>(k)].tp < 2) continue;
+    bool clean = true;
+    for (int q = k; q < n && q < k + window && clean; ++q) clean = r.steps[static_cast<std::size_t>(q)].fp == 0;
+    if (clean) return k - first + 1;
+  }
+  return 0;
 }
 
 RunResult SlamSession::finish() {
@@ -306,6 +333,7 @@ void SimSource::rewind() {
   sim_ = std::make_unique<Simulator>(sc_, seed_);
   k_ = 0;
   scan_due_ = false;
+  kidnap_due_ = false;
 }
 
 bool SimSource::next(RunInput& in) {
@@ -318,8 +346,24 @@ bool SimSource::next(RunInput& in) {
     in.true_pose = step_.true_pose;
     return true;
   }
+  if (kidnap_due_) {  // the kidnap, before the prediction of the interval it happened in
+    kidnap_due_ = false;
+    in = prediction(sc_, step_);
+    scan_due_ = step_.scan;
+    return true;
+  }
   if (!sim_->step(step_) || (max_steps_ != 0 && k_ >= max_steps_)) return false;
   ++k_;
+  if (step_.kidnapped) {
+    kidnap_due_ = true;
+    in = RunInput{};
+    in.relocalise = true;
+    in.pose_cov = Eigen::Vector3d(sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m,
+                                  sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m,
+                                  sc_.kidnap_sigma_theta_rad * sc_.kidnap_sigma_theta_rad)
+                      .asDiagonal();
+    return true;
+  }
   in = prediction(sc_, step_);
   scan_due_ = step_.scan;
   return true;
@@ -354,7 +398,9 @@ RunResult run_inputs(RunSource& src, const RunOptions& opt) {
   SlamSession session(opt, src.sensor, src.true_landmarks, src.x0, src.P0);
   RunInput in;
   while (src.next(in)) {
-    if (in.scan) {
+    if (in.relocalise) {
+      session.relocalise(in.pose_cov);
+    } else if (in.scan) {
       session.scan(in.observations, in.t_s, in.have_truth ? &in.true_pose : nullptr);
     } else {
       session.predict(in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps);

@@ -15,10 +15,10 @@ std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
   std::vector<Strategy> out;
   for (const std::string& n : names) {
     bool known = false;
-    for (int k = 0; k < kStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
+    for (int k = 0; k < kPaperStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
     if (!known) throw std::invalid_argument("unknown strategy " + n);
   }
-  for (int k = 0; k < kStrategyCount; ++k) {
+  for (int k = 0; k < kPaperStrategyCount; ++k) {
     const Strategy s = static_cast<Strategy>(k);
     bool take = names.empty();
     for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
@@ -192,6 +192,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
 
   RunInput in;
   while (src.next(in)) {
+    if (in.relocalise) throw std::runtime_error("a kidnap (relocalisation) is not carried by the serial protocol");
     if (!in.scan) {
       link.odometry(link_odometry(in));
       continue;

@@ -69,12 +69,22 @@ Scenario load_scenario(const std::string& path) {
     s.detection_probability = j.value("detection_probability", s.detection_probability);
     s.clutter_per_scan = j.value("clutter_per_scan", s.clutter_per_scan);
     s.noise_scale = j.value("noise_scale", s.noise_scale);
+    if (j.contains("kidnap")) {  // {"t_s", "dx_m", "dy_m", "dtheta_deg", "sigma_xy_m", "sigma_theta_deg"}
+      const auto& k = j.at("kidnap");
+      s.kidnap_t_s = k.at("t_s").get<double>();
+      s.kidnap_move = Eigen::Vector3d(k.value("dx_m", 0.0), k.value("dy_m", 0.0),
+                                      k.value("dtheta_deg", 0.0) * kPi<double> / 180);
+      s.kidnap_sigma_xy_m = k.value("sigma_xy_m", s.kidnap_sigma_xy_m);
+      s.kidnap_sigma_theta_rad = k.value("sigma_theta_deg", s.kidnap_sigma_theta_rad * 180 / kPi<double>) *
+                                 kPi<double> / 180;
+    }
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
   }
   if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
       !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) ||
-      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0) {
+      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0 ||
+      !s.kidnap_move.allFinite() || !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0)) {
     throw std::runtime_error(path + ": a parameter is out of range");
   }
   return s;
@@ -93,6 +103,12 @@ bool Simulator::step(SimStep& out) {
   const Eigen::Vector2d to = s_.waypoints[target_] - Eigen::Vector2d(x_.x, x_.y);
   const double err = wrap_angle(std::atan2(to.y(), to.x()) - x_.theta);
   const double w = std::clamp(s_.turn_gain * err, -s_.max_turn_rate_radps, s_.max_turn_rate_radps);
+  out.kidnapped = false;
+  if (s_.kidnap_t_s > 0 && !kidnap_done_ && static_cast<double>(k_ + 1) * s_.dt_s >= s_.kidnap_t_s) {
+    kidnap_done_ = true;
+    out.kidnapped = true;
+    x_ = {x_.x + s_.kidnap_move.x(), x_.y + s_.kidnap_move.y(), wrap_angle(x_.theta + s_.kidnap_move.z())};
+  }
   x_ = ekf::move(x_, ekf::Odometry<double>{s_.speed_mps, w, s_.dt_s, 0, 0});
   if ((s_.waypoints[target_] - Eigen::Vector2d(x_.x, x_.y)).norm() < s_.waypoint_radius_m) {
     if (target_ == 0) ++lap_;  // back at the start: a lap is done

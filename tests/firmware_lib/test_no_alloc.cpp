@@ -66,10 +66,12 @@ void check_no_alloc_strategies(int m, int n) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     auto p = scene_problem<T, B>(scene_params(m, n, 8), seed);
     for (int s = 0; s < kStrategyCount; ++s) {
-      for (int k : {0, 3}) {  // GMM-EM by BIC and fixed K
+      for (int k : {0, 3, -3}) {  // GMM-EM by BIC and fixed K; -3: K = 3 with the verification
         StrategyParams<T> sp;
         sp.local_radius_m = T(6);
-        sp.groups = k;
+        sp.groups = k < 0 ? -k : k;
+        sp.verify = k < 0;
+        sp.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed tried on every scene
         AssociationConfig<T, B> cfg;
         REQUIRE(make_strategy(static_cast<Strategy>(s), sp, cfg) == Status::kOk);
         Status st = Status::kNoConvergence;

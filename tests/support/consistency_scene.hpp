@@ -84,4 +84,38 @@ inline WorldPairStatistic world_pair_statistic(const host::Scene& s, int i, int 
   return w;
 }
 
+/// A constructed relocalisation: seven mapped landmarks with distinct pairwise distances, the robot
+/// at the origin, its estimate 2.5 m and 0.8 rad (46 deg) off (with a covariance that admits it),
+/// one clutter return. Measurements carry fixed small errors.
+inline host::Scene wrong_pose_scene() {
+  host::Scene s;
+  s.true_pose = {0.0, 0.0, 0.0};
+  s.est_pose = {2.0, -1.5, 0.8};
+  s.true_landmarks = {{8.2, 0.8}, {10.5, -0.8}, {7.1, -2.5}, {10.3, 5.3}, {3.7, 3.9}, {2.4, 5.6}, {9.4, -3.8}};
+  const double offsets[7][2] = {{0.03, -0.02}, {-0.04, 0.01}, {0.02, 0.05}, {-0.01, -0.03},
+                                {0.05, 0.02}, {-0.03, 0.04}, {0.01, -0.05}};
+  const int n = static_cast<int>(s.true_landmarks.size());
+  for (int j = 0; j < n; ++j) {
+    s.est_landmarks.push_back(s.true_landmarks[j] + Eigen::Vector2d(offsets[j][0], offsets[j][1]));
+  }
+  s.P = Eigen::MatrixXd::Zero(3 + 2 * n, 3 + 2 * n);
+  s.P.topLeftCorner<3, 3>() = Eigen::Vector3d(2.5 * 2.5, 2.5 * 2.5, 1.0).asDiagonal();
+  s.P.bottomRightCorner(2 * n, 2 * n).diagonal().setConstant(0.05 * 0.05);
+  host::predict_measurements(s);
+  s.R = Eigen::Vector2d(0.05 * 0.05, 0.01 * 0.01).asDiagonal();
+  // Observations in a scrambled order; the clutter return third.
+  const int order[8] = {4, 0, -1, 6, 2, 5, 1, 3};
+  const double noise[8][2] = {{0.02, -0.004}, {-0.03, 0.006}, {0, 0}, {0.04, 0.002},
+                              {-0.01, -0.008}, {0.03, 0.005}, {-0.02, 0.003}, {0.01, -0.006}};
+  for (int q = 0; q < 8; ++q) {
+    s.truth.push_back(order[q]);
+    Vec2<double> z = order[q] >= 0 ? observe(s.true_pose, Vec2<double>(s.true_landmarks[order[q]]))
+                                   : Vec2<double>(6.0, -0.3);
+    z.x() += noise[q][0];
+    z.y() += noise[q][1];
+    s.z.push_back(z);
+  }
+  return s;
+}
+
 }  // namespace geojcbb::test

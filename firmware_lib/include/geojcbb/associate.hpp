@@ -1,14 +1,19 @@
 // The association pipeline: the only file that knows the order of the stages.
-//   validate -> local region + individual gate -> group (none | k-means | DBSCAN | GMM-EM)
-//   -> search per group (ICNN | JCBB, one node budget shared by the groups)
+//   validate -> local region + individual gate
+//   -> seed (when the pose is uncertain: the pose-free max clique, tested jointly; issue 12)
+//   -> group (none | k-means | DBSCAN | GMM-EM; skipped when seeded)
+//   -> search per group (ICNN | JCBB, one node budget shared by the groups; extends the seed;
+//      RJC instead of JCBB for a large ungrouped scan when asked)
 //   -> merge (mutual exclusion across groups, joint re-check) -> decline (ambiguous pairings left
-//   kUnmatched, when an ambiguity margin is set) -> result
+//   kUnmatched, when an ambiguity margin is set) -> verify (pairings outside the answer's largest
+//   pairwise consistent subset dropped; issue 12) -> result
 // No heap: all working memory is the caller's Workspace; outputs are written only on kOk.
 #pragma once
 
 #include "geojcbb/cluster/dbscan.hpp"
 #include "geojcbb/cluster/gmm_em.hpp"
 #include "geojcbb/cluster/kmeans.hpp"
+#include "geojcbb/consistency/consistent_hypothesis.hpp"
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/strategy.hpp"
@@ -16,6 +21,7 @@
 #include "geojcbb/gate/validate.hpp"
 #include "geojcbb/jcbb/icnn.hpp"
 #include "geojcbb/jcbb/jcbb.hpp"
+#include "geojcbb/jcbb/rjc.hpp"
 #include "geojcbb/merge/merge.hpp"
 
 namespace geojcbb {
@@ -32,6 +38,13 @@ struct Workspace {
   MergeWorkspace<T, B> merge;
   std::array<Hypothesis, B::kMaxObservations> hyp;
   std::array<bool, B::kMaxObservations> declined;  ///< per observation: ambiguous (decline stage)
+  /// Graph nodes of the seed's and the verification's consistency graphs: the verification needs one
+  /// per observation.
+  static constexpr int kGraphNodes = B::kMaxObservations <= kDefaultGraphNodes ? kDefaultGraphNodes : 128;
+  ConsistencyWorkspace<T, B, kGraphNodes> consistency;      ///< seed and verify (issue 12)
+  std::array<std::int16_t, B::kMaxObservations> seed;       ///< the seed's hypothesis; verify's scratch
+  std::array<std::int8_t, B::kMaxObservations> seed_label;  ///< 1: pairing fixed by the seed
+  RjcWorkspace<B> rjc;                                      ///< RJC's subsets and tries (issue 12)
 };
 
 namespace pipeline_detail {
@@ -80,6 +93,76 @@ bool apply_decline(int m, Workspace<T, B>& ws, AssociationDiagnostics& diag) {
   return any;
 }
 
+/// Observations with at least one compatible candidate.
+template <typename T, class B>
+int compatible_observations(int m, const CompatibilityTable<T, B>& table) {
+  int n = 0;
+  for (int i = 0; i < m; ++i) n += table.count[i] > 0;  // <= kMaxObservations
+  return n;
+}
+
+/// The consistency stage's options for this call: the config's graph options in its local region.
+template <typename T, class B>
+ConsistencyOptions<T> consistency_options(const AssociationConfig<T, B>& cfg) {
+  ConsistencyOptions<T> o = cfg.consistency;
+  o.local_region = cfg.local_region;
+  o.local_radius_m = cfg.local_radius_m;
+  return o;
+}
+
+/// Seed stage: when the pose is uncertain, the pose-free clique in ws.seed; `seeded` when it has at
+/// least seed_min_pairings pairings and passes the joint test at its size.
+/// @return kOk; kNotPositiveDefinite (C not PSD).
+template <typename T, class B>
+[[nodiscard]] Status seed(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                          const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws, AssociationDiagnostics& diag,
+                          bool& seeded) {
+  seeded = false;
+  const ConsistencyOptions<T> opt = consistency_options(cfg);
+  ws.consistency.geometry.prepare(obs, pred);
+  if (!(least_position_variance(ws.consistency, pred, opt) >= cfg.seed_min_position_var_m2)) return Status::kOk;
+  diag.seed_tried = true;
+  Status s = clique_of_validated(obs, pred, opt, ws.consistency);
+  if (s != Status::kOk) return s;
+  clique_hypothesis(ws.consistency, obs.count, ws.seed);
+  const ConsistencyDiagnostics cd = clique_diagnostics(ws.consistency);
+  diag.seed_pairings = cd.clique_size;
+  diag.clique_graph_nodes = cd.graph_nodes;
+  diag.clique_search_nodes += cd.search_nodes;
+  diag.clique_budget_hit = diag.clique_budget_hit || cd.budget_hit;
+  diag.clique_nodes_truncated = cd.nodes_truncated;
+  if (cd.clique_size < cfg.seed_min_pairings) return Status::kOk;
+  T d2 = T(0);
+  s = hypothesis_joint_d2(obs, pred, ws.seed, ws.jcbb.joint, d2);
+  if (s != Status::kOk) return s;
+  seeded = d2 <= cfg.gate.joint[cd.clique_size];
+  return Status::kOk;
+}
+
+/// Verify stage: ws.hyp reduced to its largest pairwise consistent subset; `dropped` counts the
+/// pairings removed.
+/// @return kOk; kNotPositiveDefinite (C not PSD).
+template <typename T, class B>
+[[nodiscard]] Status verify(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                            const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws, AssociationDiagnostics& diag,
+                            int& dropped) {
+  dropped = 0;
+  const Status s = consistent_subset(obs, pred, consistency_options(cfg), ws.hyp, ws.consistency);
+  if (s != Status::kOk) return s;
+  clique_hypothesis(ws.consistency, obs.count, ws.seed);
+  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+    if (ws.hyp[i] >= 0 && ws.seed[i] < 0) {
+      ws.hyp[i] = -1;
+      ++dropped;
+    }
+  }
+  diag.verify_dropped = static_cast<std::uint16_t>(dropped);
+  diag.clique_graph_nodes = static_cast<std::uint16_t>(ws.consistency.pairings.count);
+  diag.clique_search_nodes += ws.consistency.clique.nodes;
+  diag.clique_budget_hit = diag.clique_budget_hit || ws.consistency.clique.budget_hit;
+  return Status::kOk;
+}
+
 }  // namespace pipeline_detail
 
 /// Associates one scan's observations with the predicted candidates.
@@ -90,7 +173,7 @@ bool apply_decline(int m, Workspace<T, B>& ws, AssociationDiagnostics& diag) {
 /// @param[out] out   the hypothesis; written only when kOk is returned
 /// @return kOk (an empty scan gives an empty answer; spent budgets are flagged in out.diag);
 ///         otherwise the first failing check of validate(), or kNotPositiveDefinite when C is found
-///         indefinite during a joint test.
+///         indefinite during a joint test or a pairwise distance test (seed, verify).
 template <typename T, class B>
 [[nodiscard]] Status associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
@@ -123,37 +206,82 @@ template <typename T, class B>
     s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
     if (s != Status::kOk) return s;
   } else {
-    pipeline_detail::group(obs, cfg, ws, diag);
-    diag.groups = static_cast<std::uint8_t>(ws.groups.count);
-    std::uint32_t nodes_left = static_cast<std::uint32_t>(cfg.node_budget);
-    for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
-    for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
-      SearchOutcome<T, B>& o = ws.outcome;
-      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o,
-                      cfg.condition_groups ? &ws.hyp : nullptr);
+    bool seeded = false;
+    if (cfg.seed) {
+      s = pipeline_detail::seed(obs, pred, cfg, ws, diag, seeded);
       if (s != Status::kOk) return s;
-      nodes_left -= o.nodes;
-      diag.jcbb_nodes += o.nodes;
-      diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
+    }
+    if (seeded) {  // one search over the unseeded observations, extending the seed
+      for (int i = 0; i < m; ++i) ws.seed_label[i] = ws.seed[i] >= 0 ? 1 : 0;  // <= kMaxObservations
+      diag.seed_used = true;
+      diag.groups = 1;
+      SearchOutcome<T, B>& o = ws.outcome;
+      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0},
+                      static_cast<std::uint32_t>(cfg.node_budget), ws.jcbb, o, &ws.seed);
+      if (s != Status::kOk) return s;
+      diag.jcbb_nodes = o.nodes;
+      diag.node_budget_hit = o.budget_hit;
       for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-        if (ws.groups.label[i] != g) continue;
-        ws.hyp[i] = o.best[i];
-        ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
+        ws.hyp[i] = ws.seed[i] >= 0 ? ws.seed[i] : o.best[i];
+        ws.declined[i] = ws.seed[i] < 0 && decline && o.ambiguous(i, cfg.ambiguity_margin);
       }
       joint_d2 = o.joint_d2;
+      if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
+        s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
+        if (s != Status::kOk) return s;
+      }
+    } else if (cfg.rjc && pipeline_detail::compatible_observations(m, ws.table) > cfg.rjc_subset) {
+      RjcStats st;
+      s = rjc_search(obs, pred, cfg, ws.table, static_cast<std::uint32_t>(cfg.node_budget), cfg.rjc_tries,
+                     cfg.rjc_subset, cfg.rjc_seed, ws.jcbb, ws.outcome, ws.rjc, ws.hyp, joint_d2, st);
+      if (s != Status::kOk) return s;
+      diag.rjc_used = true;
+      diag.groups = 1;
+      diag.jcbb_nodes = st.nodes;
+      diag.node_budget_hit = st.budget_hit;
+    } else {
+      pipeline_detail::group(obs, cfg, ws, diag);
+      diag.groups = static_cast<std::uint8_t>(ws.groups.count);
+      std::uint32_t nodes_left = static_cast<std::uint32_t>(cfg.node_budget);
+      for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
+      for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
+        SearchOutcome<T, B>& o = ws.outcome;
+        s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o,
+                        cfg.condition_groups ? &ws.hyp : nullptr);
+        if (s != Status::kOk) return s;
+        nodes_left -= o.nodes;
+        diag.jcbb_nodes += o.nodes;
+        diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
+        for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+          if (ws.groups.label[i] != g) continue;
+          ws.hyp[i] = o.best[i];
+          ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
+        }
+        joint_d2 = o.joint_d2;
+      }
+      // Conditioned groups: the last search's D2 covers the whole union. Independent groups: the union's
+      // D2 is computed by the merge.
+      if (ws.groups.count != 1 && !cfg.condition_groups) joint_d2 = T(-1);
+      MergeStats ms;
+      s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
+      if (s != Status::kOk) return s;
+      diag.merge_conflicts = ms.conflicts;
+      diag.recheck_failed = ms.recheck_failed;
+      diag.recheck_dropped = ms.repair_dropped;
+      diag.jcbb_nodes += ms.repair_nodes;
+      diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
+      if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
+        s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
+        if (s != Status::kOk) return s;
+      }
     }
-    // Conditioned groups: the last search's D2 covers the whole union. Independent groups: the union's
-    // D2 is computed by the merge.
-    if (ws.groups.count != 1 && !cfg.condition_groups) joint_d2 = T(-1);
-    MergeStats ms;
-    s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
+  }
+
+  if (cfg.verify) {
+    int dropped = 0;
+    s = pipeline_detail::verify(obs, pred, cfg, ws, diag, dropped);
     if (s != Status::kOk) return s;
-    diag.merge_conflicts = ms.conflicts;
-    diag.recheck_failed = ms.recheck_failed;
-    diag.recheck_dropped = ms.repair_dropped;
-    diag.jcbb_nodes += ms.repair_nodes;
-    diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
-    if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
+    if (dropped > 0) {
       s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
       if (s != Status::kOk) return s;
     }

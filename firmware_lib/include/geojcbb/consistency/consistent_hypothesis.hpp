@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "geojcbb/consistency/max_clique.hpp"
 #include "geojcbb/consistency/options.hpp"
@@ -52,6 +53,93 @@ struct ConsistencyWorkspace {
   CliqueResult<MaxNodes> clique;
 };
 
+/// The stage without its validation (associate() has validated the same inputs): wide gate ->
+/// graph -> max clique, left in ws.pairings, ws.graph and ws.clique.
+/// @return kOk; kNotPositiveDefinite from the graph (C not PSD).
+template <typename T, class B, int MaxNodes>
+[[nodiscard]] Status clique_of_validated(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                         const ConsistencyOptions<T>& opt, ConsistencyWorkspace<T, B, MaxNodes>& ws) {
+  ws.geometry.prepare(obs, pred);
+  select_pairings(obs, pred, opt, ws.pairings);
+  const Status s = build_consistency_graph(ws.geometry, pred, ws.pairings, opt.pair_d2, ws.graph);
+  if (s != Status::kOk) return s;
+  return max_clique(ws.graph, opt.node_budget, ws.search, ws.clique);
+}
+
+/// The clique in ws (after clique_of_validated or consistent_subset) as a hypothesis: per
+/// observation its candidate, or -1.
+template <typename T, class B, int MaxNodes>
+void clique_hypothesis(const ConsistencyWorkspace<T, B, MaxNodes>& ws, int m,
+                       std::array<std::int16_t, B::kMaxObservations>& hyp) {
+  for (int i = 0; i < m; ++i) hyp[i] = -1;       // <= kMaxObservations
+  for (int x = 0; x < ws.pairings.count; ++x) {  // <= MaxNodes
+    if (ws.clique.members.test(x)) hyp[ws.pairings.node[x].obs] = ws.pairings.node[x].cand;
+  }
+}
+
+/// The counters of the last clique search in ws.
+template <typename T, class B, int MaxNodes>
+ConsistencyDiagnostics clique_diagnostics(const ConsistencyWorkspace<T, B, MaxNodes>& ws) {
+  ConsistencyDiagnostics d;
+  d.offered_pairings = static_cast<std::uint32_t>(ws.pairings.offered);
+  d.graph_nodes = static_cast<std::uint16_t>(ws.pairings.count);
+  d.graph_edges = static_cast<std::uint16_t>(ws.graph.edges());
+  d.clique_size = static_cast<std::uint16_t>(ws.clique.size);
+  d.search_nodes = ws.clique.nodes;
+  d.nodes_truncated = ws.pairings.truncated;
+  d.budget_hit = ws.clique.budget_hit;
+  return d;
+}
+
+/// Verification: the largest pairwise consistent subset of a given hypothesis (per observation a
+/// candidate or -1), i.e. the max clique of the consistency graph whose nodes are the hypothesis's
+/// own pairings. Inputs validated (as associate() does); the hypothesis has at most one pairing per
+/// observation, so it fits the graph when MaxObservations <= MaxNodes. The subset is left in ws
+/// (clique_hypothesis() reads it).
+/// @return kOk; kNotPositiveDefinite from the graph (C not PSD).
+template <typename T, class B, int MaxNodes>
+[[nodiscard]] Status consistent_subset(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                       const ConsistencyOptions<T>& opt,
+                                       const std::array<std::int16_t, B::kMaxObservations>& hyp,
+                                       ConsistencyWorkspace<T, B, MaxNodes>& ws) {
+  static_assert(B::kMaxObservations <= MaxNodes, "a hypothesis must fit the verification graph");
+  ws.geometry.prepare(obs, pred);
+  PairingList<T, MaxNodes>& list = ws.pairings;
+  list.count = 0;
+  list.truncated = false;
+  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+    if (hyp[i] < 0) continue;
+    Pairing<T>& p = list.node[list.count++];
+    p.obs = static_cast<std::int8_t>(i);
+    p.cand = hyp[i];
+    p.d2 = T(0);  // not used: no gate, no cap
+  }
+  list.offered = list.count;
+  const Status s = build_consistency_graph(ws.geometry, pred, list, opt.pair_d2, ws.graph);
+  if (s != Status::kOk) return s;
+  return max_clique(ws.graph, opt.node_budget, ws.search, ws.clique);
+}
+
+/// How well the prediction places its best-known candidate: the smallest, over the candidates in
+/// the region, of tr(J_a C_aa J_a^T) [m^2], the Cartesian position variance of the predicted feature
+/// in the sensor frame. C_aa = H_a P H_a^T holds the pose's share (translation in full, heading
+/// times range^2) plus the feature's own, so this is a lower bound on the pose's translation
+/// variance seen through the map; large only when the pose itself is uncertain. Infinity when no
+/// candidate is in the region. Inputs validated; ws.geometry prepared.
+template <typename T, class B, int MaxNodes>
+T least_position_variance(const ConsistencyWorkspace<T, B, MaxNodes>& ws, const Prediction<T, B>& pred,
+                          const ConsistencyOptions<T>& opt) {
+  T least = std::numeric_limits<T>::infinity();
+  for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+    if (!opt.in_region(pred.h[a])) continue;
+    const Mat2<T>& J = ws.geometry.cand_J[a];
+    const Mat2<T> S = J * pred.C.template block<2, 2>(2 * a, 2 * a) * J.transpose();
+    const T v = S(0, 0) + S(1, 1);
+    if (v < least) least = v;
+  }
+  return least;
+}
+
 /// The largest set of pairwise consistent pairings (a maximum clique of the consistency graph). It
 /// does not use the predicted pose beyond the candidates' h and C, and is meant for when that pose
 /// cannot be trusted (loop closure, relocalisation) or to verify a hypothesis found with it. Among
@@ -79,27 +167,12 @@ template <typename T, class B, int MaxNodes>
   s = validate_prediction(pred, [&opt](const Vec2<T>& h) { return opt.in_region(h); });
   if (s != Status::kOk) return s;
 
-  ws.geometry.prepare(obs, pred);
-  select_pairings(obs, pred, opt, ws.pairings);
-  s = build_consistency_graph(ws.geometry, pred, ws.pairings, opt.pair_d2, ws.graph);
+  s = clique_of_validated(obs, pred, opt, ws);
   if (s != Status::kOk) return s;
-  s = max_clique(ws.graph, opt.node_budget, ws.search, ws.clique);
-  if (s != Status::kOk) return s;
-
   out.count = obs.count;
-  for (int i = 0; i < obs.count; ++i) out.candidate[i] = -1;  // <= kMaxObservations
-  for (int x = 0; x < ws.pairings.count; ++x) {                // <= MaxNodes
-    if (ws.clique.members.test(x)) out.candidate[ws.pairings.node[x].obs] = ws.pairings.node[x].cand;
-  }
+  clique_hypothesis(ws, obs.count, out.candidate);
   out.pairings = ws.clique.size;
-  ConsistencyDiagnostics& d = out.diag;
-  d.offered_pairings = static_cast<std::uint32_t>(ws.pairings.offered);
-  d.graph_nodes = static_cast<std::uint16_t>(ws.pairings.count);
-  d.graph_edges = static_cast<std::uint16_t>(ws.graph.edges());
-  d.clique_size = static_cast<std::uint16_t>(ws.clique.size);
-  d.search_nodes = ws.clique.nodes;
-  d.nodes_truncated = ws.pairings.truncated;
-  d.budget_hit = ws.clique.budget_hit;
+  out.diag = clique_diagnostics(ws);
   return Status::kOk;
 }
 

@@ -5,6 +5,7 @@
 #include "geojcbb/cluster/dbscan.hpp"
 #include "geojcbb/cluster/gmm_em.hpp"
 #include "geojcbb/cluster/kmeans.hpp"
+#include "geojcbb/consistency/options.hpp"
 #include "geojcbb/core/capacity.hpp"
 #include "geojcbb/gate/thresholds.hpp"
 
@@ -22,6 +23,9 @@ enum class Grouping : std::uint8_t {
   kDbscan,  ///< DBSCAN (DFJCBB)
   kGmmEm,   ///< Gaussian mixture by EM (GEMJCBB, GEOJCBB)
 };
+
+/// Most RJC tries per scan (AssociationConfig::rjc_tries).
+constexpr int kMaxRjcTries = 64;
 
 template <typename T, class B>
 struct AssociationConfig {
@@ -61,6 +65,34 @@ struct AssociationConfig {
   /// (kNewFeature, its d2 the nearest over the other candidates) instead of kUnmatched; a second
   /// landmark next to a mapped one can then be mapped when both are seen together. Off: kUnmatched.
   bool new_if_candidates_taken = false;
+  /// Our addition (issue 12), verify: the answer's pairings must also be pairwise consistent
+  /// (consistency/, pose-free distance test). The largest pairwise consistent subset of the answer
+  /// (the max clique of the graph over its own pairings) is kept; the other pairings are dropped and
+  /// their observations left kUnmatched. Dropping rather than replacing the answer with the clique
+  /// of every wide-gate pairing: the subset keeps the joint test's choice wherever it is consistent
+  /// (the wide clique alone holds a wrong pairing in about 1 scene in 10: docs/consistency.md,
+  /// "Limits"), and its graph has at most one node per observation, so it is never truncated.
+  bool verify = false;
+  /// Our addition (issue 12), seed: when the pose is uncertain (the least Cartesian position variance
+  /// of a predicted candidate, tr(J_a C_aa J_a^T), is at least seed_min_position_var_m2), the
+  /// pose-free clique over the wide-gate pairings is tested jointly and, when it passes with at
+  /// least seed_min_pairings pairings, fixed as the prefix of one JCBB search over the rest of the
+  /// scan (no grouping: the prefix conditions the whole scan). JCBB only (not ICNN).
+  bool seed = false;
+  T seed_min_position_var_m2 = T(4);  ///< [m^2]; the seed's trigger (> 0)
+  int seed_min_pairings = 3;          ///< a clique smaller than this is not used (>= 2)
+  /// Graph options of verify and seed: pairwise gate, wide gate, clique budget. Its local region is
+  /// taken from this config's, not from here.
+  ConsistencyOptions<T> consistency;
+  /// Our addition (issue 12), randomized joint compatibility for large scans (RJC; Paz, Guivant,
+  /// Tardos, Neira 2007; jcbb/rjc.hpp): JCBB on rjc_subset random observations, the rest completed
+  /// by nearest neighbour under the joint test, rjc_tries times from rjc_seed; the best try is kept.
+  /// Used by JCBB without grouping when more than rjc_subset observations have a compatible
+  /// candidate (smaller scans get plain JCBB). Not with an ambiguity margin (no runner-up).
+  bool rjc = false;
+  int rjc_tries = 8;            ///< 1 .. kMaxRjcTries; each try gets node_budget / rjc_tries nodes
+  int rjc_subset = 8;           ///< 1 .. MaxObservations
+  std::uint64_t rjc_seed = 1;   ///< the same inputs and seed give the same answer
   /// Search observations with the fewest compatible candidates first (smaller tree, same answer).
   bool order_fewest_candidates_first = true;
   /// Interpretation-tree nodes per scan, shared by every group's search, 1 .. B::kMaxJcbbNodes.

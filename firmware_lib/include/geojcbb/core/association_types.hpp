@@ -67,6 +67,15 @@ struct AssociationDiagnostics {
   bool recheck_failed = false;           ///< the merged union failed the joint test and was repaired
   std::uint16_t recheck_dropped = 0;     ///< pairings the repair removed
   std::uint16_t declined = 0;            ///< pairings left kUnmatched as ambiguous (ambiguity_margin)
+  std::uint16_t verify_dropped = 0;      ///< pairings the verification dropped (not pairwise consistent)
+  bool seed_tried = false;               ///< the pose was uncertain: the pose-free clique was computed
+  bool seed_used = false;                ///< the clique passed the joint test and seeded the search
+  std::uint16_t seed_pairings = 0;       ///< pairings of the clique (when tried)
+  std::uint16_t clique_graph_nodes = 0;  ///< graph nodes of the last consistency graph (seed or verify)
+  std::uint32_t clique_search_nodes = 0; ///< max-clique search nodes, seed and verify together
+  bool clique_budget_hit = false;        ///< a max-clique search stopped at its budget (best so far used)
+  bool clique_nodes_truncated = false;   ///< the seed's wide gate passed more pairings than graph nodes
+  bool rjc_used = false;                 ///< the scan was searched by RJC (cfg.rjc and a large scan)
 };
 
 template <typename T, class B>

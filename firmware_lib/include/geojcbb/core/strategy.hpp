@@ -6,16 +6,23 @@
 //   DFJCBB   no            DBSCAN    no                no
 //   GEMJCBB  yes           GMM-EM    no                no
 //   GEOJCBB  yes           GMM-EM    yes               yes
+//   PCJCBB   no            none      yes               yes   + verify + seed (ours, issue 12)
 // The joint re-check of merged hypotheses (our addition) is on by default in the grouped presets;
-// StrategyParams switches it off to reproduce the papers' methods exactly.
+// StrategyParams switches it off to reproduce the papers' methods exactly. PCJCBB ("pairwise
+// consistent JCBB") is not a paper's method: JCBB with exclusion and the optimal criterion, whose
+// answer is verified pairwise and which is seeded by the pose-free clique when the pose is
+// uncertain (docs/consistency.md). The verification can be switched into every other preset
+// (StrategyParams::verify).
 #pragma once
 
 #include "geojcbb/core/association_config.hpp"
 
 namespace geojcbb {
 
-enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb };
-constexpr int kStrategyCount = 6;
+enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb, kPcjcbb };
+constexpr int kStrategyCount = 7;
+/// The papers' six (ICNN .. GEOJCBB); the wire protocol's strategy codes cover these only.
+constexpr int kPaperStrategyCount = 6;
 
 constexpr const char* to_string(Strategy s) {
   switch (s) {
@@ -25,6 +32,7 @@ constexpr const char* to_string(Strategy s) {
     case Strategy::kDfjcbb: return "DFJCBB";
     case Strategy::kGemjcbb: return "GEMJCBB";
     case Strategy::kGeojcbb: return "GEOJCBB";
+    case Strategy::kPcjcbb: return "PCJCBB";
   }
   return "?";
 }
@@ -41,6 +49,15 @@ struct StrategyParams {
   int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
   double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
+  bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
+  /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
+  T seed_min_position_var_m2 = T(4);
+  /// The consistency graph's wide gate, chi2inv(0.99999, 2) = -2 ln(1e-5), and its pairwise test,
+  /// chi2inv(0.999, 1), as thresholds rather than levels: a second chi2_inv inlined into
+  /// make_strategy took its frame over the controller's 512-byte limit (the values are checked
+  /// against chi2_inv in tests/firmware_lib/consistency/test_associate_consistency.cpp).
+  T consistency_wide_d2 = T(23.025850929940457);
+  T consistency_pair_d2 = T(10.827566170662733);
 };
 
 /// Builds a strategy's configuration.
@@ -48,32 +65,54 @@ struct StrategyParams {
 ///         range; kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
 template <typename T, class B>
 [[nodiscard]] Status make_strategy(Strategy s, const StrategyParams<T>& p, AssociationConfig<T, B>& out) {
-  AssociationConfig<T, B> c;
-  const Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, c.gate);
+  // Every check and quantile first, into small locals; `out` is then written field by field (a whole
+  // AssociationConfig on the stack would take this frame over the controller's 512-byte limit).
+  GateThresholds<T, B::kMaxObservations> gate;
+  Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, gate);
   if (st != Status::kOk) return st;
+  ConsistencyOptions<T> consistency;
+  consistency.wide_d2 = p.consistency_wide_d2;
+  consistency.pair_d2 = p.consistency_pair_d2;
+  if (!consistency.valid()) return Status::kInvalidInput;
   if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget < 0 || p.node_budget > B::kMaxJcbbNodes) {
     return Status::kInvalidInput;
   }
-  c.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
-  c.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
-               : s == Strategy::kDfjcbb ? Grouping::kDbscan
-               : (s == Strategy::kGemjcbb || s == Strategy::kGeojcbb) ? Grouping::kGmmEm
-                                                                     : Grouping::kNone;
-  c.local_region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
-  if (c.local_region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
-  c.local_radius_m = p.local_radius_m;
-  c.mutual_exclusion = s == Strategy::kGeojcbb;
-  c.optimal_criterion = s == Strategy::kGeojcbb;
-  c.groups = p.groups == 0 && c.grouping != Grouping::kGmmEm ? 3 : p.groups;
-  c.dbscan_eps_m = p.dbscan_eps_m;
-  c.dbscan_min_points = p.dbscan_min_points;
-  c.joint_recheck = p.joint_recheck;
-  c.condition_groups = p.condition_groups;
-  c.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
+  const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
+  if (region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
+  if (!(p.seed_min_position_var_m2 > T(0))) return Status::kInvalidInput;
   if (!(p.ambiguity_margin >= 0) || !(p.ambiguity_margin < 1e6)) return Status::kInvalidInput;
-  c.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
-  c.new_if_candidates_taken = p.new_if_candidates_taken;
-  out = c;
+  // The fields no preset sets get AssociationConfig's defaults, one by one (a default-constructed
+  // temporary would cost the frame as much as a local copy).
+  out.kmeans_max_iterations = kMaxKMeansIterations;
+  out.em = EmOptions<T>{};
+  out.order_fewest_candidates_first = true;
+  out.seed_min_pairings = 3;
+  out.rjc = false;
+  out.rjc_tries = 8;
+  out.rjc_subset = 8;
+  out.rjc_seed = 1;
+  out.gate = gate;
+  out.consistency = consistency;
+  out.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
+  out.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
+                 : s == Strategy::kDfjcbb ? Grouping::kDbscan
+                 : region                 ? Grouping::kGmmEm
+                                          : Grouping::kNone;
+  out.local_region = region;
+  out.local_radius_m = p.local_radius_m;
+  out.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.verify = p.verify || s == Strategy::kPcjcbb;
+  out.seed = s == Strategy::kPcjcbb;
+  out.seed_min_position_var_m2 = p.seed_min_position_var_m2;
+  out.groups = p.groups == 0 && out.grouping != Grouping::kGmmEm ? 3 : p.groups;
+  out.dbscan_eps_m = p.dbscan_eps_m;
+  out.dbscan_min_points = p.dbscan_min_points;
+  out.joint_recheck = p.joint_recheck;
+  out.condition_groups = p.condition_groups;
+  out.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
+  out.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
+  out.new_if_candidates_taken = p.new_if_candidates_taken;
   return Status::kOk;
 }
 

@@ -118,18 +118,8 @@ class Slam {
   /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0, const FilterOptions& options = {}) {
-    if (!std::isfinite(x0.x) || !std::isfinite(x0.y) || !std::isfinite(x0.theta) || !P0.allFinite()) {
-      return Status::kNonFinite;
-    }
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < r; ++c)
-        if (!nearly_equal(P0(r, c), P0(c, r))) return Status::kNotSymmetric;
-    // Sylvester: every leading minor positive.
-    const T m1 = P0(0, 0), m2 = P0(0, 0) * P0(1, 1) - P0(0, 1) * P0(1, 0);
-    const T m3 = P0(0, 0) * (P0(1, 1) * P0(2, 2) - P0(1, 2) * P0(2, 1)) -
-                 P0(0, 1) * (P0(1, 0) * P0(2, 2) - P0(1, 2) * P0(2, 0)) +
-                 P0(0, 2) * (P0(1, 0) * P0(2, 1) - P0(1, 1) * P0(2, 0));
-    if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
+    const Status s = check_pose_prior(x0, P0);
+    if (s != Status::kOk) return s;
     n_ = 0;
     next_id_ = 0;
     options_ = options;
@@ -139,6 +129,27 @@ class Slam {
     x_[2] = wrap_angle(x0.theta);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) P(r, c) = P0(r, c);
+    return Status::kOk;
+  }
+
+  /// Relocalisation (issue 12): the robot was carried somewhere unknown. The pose estimate becomes
+  /// x with covariance Pxx and its correlation with the map is removed (the map no longer says
+  /// anything about where the robot is); the map and its covariance are kept.
+  /// @return as reset(); nothing changes unless kOk.
+  [[nodiscard]] Status relocalise(const Pose2<T>& x, const Mat3<T>& Pxx) {
+    const Status s = check_pose_prior(x, Pxx);
+    if (s != Status::kOk) return s;
+    x_[0] = x.x;
+    x_[1] = x.y;
+    x_[2] = wrap_angle(x.theta);
+    updated_ = false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) P(r, c) = Pxx(r, c);
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+      const int l = Layout::landmark(j);
+      set_block<3, 2>(0, l, Mat32<T>::Zero());
+      set_block<2, 3>(l, 0, Mat32<T>::Zero().transpose());
+    }
     return Status::kOk;
   }
 
@@ -528,6 +539,23 @@ class Slam {
     init_cov_[3 * n_] = P(k, k);
     init_cov_[3 * n_ + 1] = P(k, k + 1);
     init_cov_[3 * n_ + 2] = P(k + 1, k + 1);
+  }
+  /// A pose and its covariance fit to start from: finite, P symmetric positive definite.
+  /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
+  [[nodiscard]] static Status check_pose_prior(const Pose2<T>& x0, const Mat3<T>& P0) {
+    if (!std::isfinite(x0.x) || !std::isfinite(x0.y) || !std::isfinite(x0.theta) || !P0.allFinite()) {
+      return Status::kNonFinite;
+    }
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < r; ++c)
+        if (!nearly_equal(P0(r, c), P0(c, r))) return Status::kNotSymmetric;
+    // Sylvester: every leading minor positive.
+    const T m1 = P0(0, 0), m2 = P0(0, 0) * P0(1, 1) - P0(0, 1) * P0(1, 0);
+    const T m3 = P0(0, 0) * (P0(1, 1) * P0(2, 2) - P0(1, 2) * P0(2, 1)) -
+                 P0(0, 1) * (P0(1, 0) * P0(2, 2) - P0(1, 2) * P0(2, 0)) +
+                 P0(0, 2) * (P0(1, 0) * P0(2, 1) - P0(1, 1) * P0(2, 0));
+    if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
+    return Status::kOk;
   }
   T& P(int r, int c) { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
   T P(int r, int c) const { return cov(r, c); }

@@ -41,6 +41,16 @@ template <typename T, class B>
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
   }
+  if ((cfg.verify || cfg.seed) && !cfg.consistency.valid()) return Status::kInvalidInput;
+  if (cfg.seed && (!(std::isfinite(cfg.seed_min_position_var_m2) && cfg.seed_min_position_var_m2 > T(0)) ||
+                   cfg.seed_min_pairings < 2 || cfg.search != SearchMethod::kJcbb)) {
+    return Status::kInvalidInput;
+  }
+  if (cfg.rjc && (cfg.rjc_tries < 1 || cfg.rjc_tries > kMaxRjcTries || cfg.node_budget < cfg.rjc_tries ||
+                  cfg.rjc_subset < 1 || cfg.rjc_subset > B::kMaxObservations || cfg.search != SearchMethod::kJcbb ||
+                  cfg.grouping != Grouping::kNone || cfg.ambiguity_margin > T(0))) {
+    return Status::kInvalidInput;
+  }
   const Status s = validate_observations(obs);
   if (s != Status::kOk) return s;
   return validate_prediction(pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); });

@@ -96,6 +96,8 @@ class SlamStep {
 
   /// @return the statuses of ekf::Slam::reset.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) { return slam_.reset(x0, P0, filter_); }
+  /// ekf::Slam::relocalise: the pose re-initialised (robot carried), the map kept.
+  [[nodiscard]] Status relocalise(const Pose2<T>& x, const Mat3<T>& Pxx) { return slam_.relocalise(x, Pxx); }
 
   /// A landmark known beforehand (ekf::Slam::add_known_landmark), after reset().
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {

@@ -43,6 +43,8 @@ struct RunOptions {
   ekf::FilterOptions filter;            ///< linearisation (first-estimates Jacobians)
   double ambiguity_margin = 0;          ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false; ///< AssociationConfig::new_if_candidates_taken
+  bool verify = false;                  ///< AssociationConfig::verify in any preset (PCJCBB: always)
+  double seed_min_position_var_m2 = 4;  ///< PCJCBB's seed trigger (AssociationConfig) [m^2]
   double static_gate_level = 0;         ///< chi-square level of LandmarkPolicy::static_gate_d2 (0: off)
   /// Known-map mode (localisation only): these true landmarks (index = truth) are the map from the
   /// start, with std known_map_sigma_m, and nothing is added or removed. Empty: SLAM.
@@ -65,13 +67,21 @@ struct MapLandmark {
 };
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
+/// A preset with the verification switched in is named with "+V" (e.g. "JCBB+V").
 struct Method {
   Strategy strategy = Strategy::kGeojcbb;
   bool oracle = false;
-  const char* name() const { return oracle ? "TRUTH" : to_string(strategy); }
+  bool verify = false;  ///< AssociationConfig::verify switched into the preset
+  const char* name() const {
+    static constexpr const char* kVerified[kStrategyCount] = {"ICNN+V",    "JCBB+V",    "KJCBB+V", "DFJCBB+V",
+                                                              "GEMJCBB+V", "GEOJCBB+V", "PCJCBB"};
+    static_assert(kStrategyCount == 7, "one +V name per strategy");
+    return oracle ? "TRUTH" : verify ? kVerified[static_cast<int>(strategy)] : to_string(strategy);
+  }
   void apply(RunOptions& o) const {
     o.strategy = strategy;
     o.oracle = oracle;
+    o.verify = o.verify || verify;
   }
 };
 
@@ -83,6 +93,8 @@ struct StepRecord {
   double var_theta = 0;  ///< heading variance [rad^2]
   int paired = 0;        ///< pairings of the scan
   double nis_sum = 0;    ///< sum of their individual NIS (d2, 2 dof each)
+  int tp = 0, fp = 0;    ///< correct and false pairings of the scan
+  double assoc_s = 0;    ///< the scan's association time
 };
 
 struct RunResult {
@@ -150,6 +162,13 @@ class RunScorer {
   RunResult res_;
 };
 
+/// Relocalisation (a scenario with a kidnap at kidnap_t_s): the first scan after the kidnap (counted
+/// from 1) that pairs at least two landmarks correctly and from which on `window` scans (2 s at
+/// 0.2 s per scan for 10) have no false pairing: the robot has found itself there. 0: never. (A
+/// window, not the rest of the run: a clutter return paired a minute later is not a failure to
+/// relocalise.)
+int relocalised_at(const RunResult& r, double kidnap_t_s, int window = 10);
+
 /// One input of a run, in time order: a prediction (odometry over dt and its noise) or a scan.
 struct RunInput {
   bool scan = false;
@@ -158,6 +177,10 @@ struct RunInput {
   double t_s = 0;                                   ///< scan time
   bool have_truth = false;                          ///< true_pose is known
   Pose2<double> true_pose{};
+  /// A kidnap: the filter's pose covariance re-set to pose_cov, the estimate kept (no prediction,
+  /// no scan in this input).
+  bool relocalise = false;
+  Eigen::Matrix3d pose_cov = Eigen::Matrix3d::Identity();
 };
 
 /// A run's inputs (the simulator's, or a MRCLAM robot's log) with what the filter starts from; fed
@@ -212,6 +235,7 @@ class SimSource : public RunSource {
   SimStep step_;
   long k_ = 0;
   bool scan_due_ = false;
+  bool kidnap_due_ = false;
 };
 
 /// The in-process filter's capacity (SlamSession): observations per scan, landmarks in the map.
@@ -232,6 +256,8 @@ class SlamSession {
   SlamSession& operator=(const SlamSession&) = delete;
 
   void predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps);
+  /// The robot was carried: its pose covariance re-set to P (the estimate kept), the map kept.
+  void relocalise(const Eigen::Matrix3d& P);
   /// One scan; each observation's truth is a landmark index < true_landmarks,
   /// or -1 for clutter. `truth` is the true pose at the scan, for the pose
   /// error and NEES (nullptr: not recorded).

@@ -41,6 +41,14 @@ struct Scenario {
   /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas
   /// above. 0 gives a noise-free run of a filter that still expects noise.
   double noise_scale = 1.0;
+  /// A kidnap (relocalisation scenes, issue 12): at kidnap_t_s the robot is carried by
+  /// kidnap_move = (dx [m], dy [m], dtheta [rad]) in the world frame, and the filter's pose
+  /// covariance is re-set to diag(kidnap_sigma_xy_m^2, kidnap_sigma_xy_m^2, kidnap_sigma_theta_rad^2)
+  /// with the estimate left where it was, as a user would after a reset. kidnap_t_s <= 0: none.
+  double kidnap_t_s = 0;
+  Eigen::Vector3d kidnap_move = Eigen::Vector3d::Zero();
+  double kidnap_sigma_xy_m = 5.0;
+  double kidnap_sigma_theta_rad = 0.5;
 };
 
 /// Reads a scenario file. Throws std::runtime_error with the file and field on a bad file.
@@ -57,6 +65,7 @@ struct SimStep {
   Pose2<double> true_pose;
   double v_mps = 0, w_radps = 0;  ///< noisy odometry over the interval that ended here
   bool scan = false;              ///< a scan was taken at the end of this interval
+  bool kidnapped = false;         ///< the robot was carried at the start of this interval
   std::vector<SimObservation> observations;
 };
 
@@ -74,6 +83,7 @@ class Simulator {
   std::size_t target_ = 1;
   int lap_ = 0;
   long k_ = 0;
+  bool kidnap_done_ = false;
 };
 
 }  // namespace geojcbb::host
