@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -97,6 +98,17 @@ Mat2<T> cov2(Input& in, T a, T d) {
   return R;
 }
 
+/// Positive definite, tested on the correlation matrix D^-1/2 P D^-1/2 so that huge or tiny (but
+/// finite) entries cannot overflow the test itself.
+bool positive_definite(const Eigen::Matrix3d& P) {
+  for (int i = 0; i < 3; ++i)
+    if (!(P(i, i) > 0)) return false;
+  Eigen::Matrix3d Q;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Q(r, c) = P(r, c) / (std::sqrt(P(r, r)) * std::sqrt(P(c, c)));
+  return Eigen::LLT<Eigen::Matrix3d>(Q).info() == Eigen::Success;
+}
+
 template <typename T, class B>
 void check_filter(const ekf::Slam<T, B>& s) {
   const int n = s.landmarks();
@@ -107,11 +119,11 @@ void check_filter(const ekf::Slam<T, B>& s) {
   Eigen::Matrix3d Prr;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) Prr(r, c) = double(s.cov(r, c));
-  require(Eigen::LLT<Eigen::Matrix3d>(Prr).info() == Eigen::Success);
+  require(positive_definite(Prr));
   for (int j = 0; j < n; ++j) {  // <= kMaxLandmarks
     const int l = 3 + 2 * j;
     const double a = s.cov(l, l), b = s.cov(l, l + 1), d = s.cov(l + 1, l + 1);
-    require(a > 0 && d > 0 && a * d - b * b > 0);
+    require(a > 0 && d > 0 && std::fabs(b) < std::sqrt(a) * std::sqrt(d));  // |correlation| < 1, no overflow
   }
 }
 
@@ -329,6 +341,16 @@ void run(Input& in) {
         break;
       }
     }
+#ifdef GEOJCBB_FUZZ_TRACE  // -DGEOJCBB_FUZZ_TRACE: each op, its status and the landmarks' blocks
+    std::fprintf(stderr, "op %d status %d landmarks %d pose P [%g %g %g; %g %g; %g]\n", op % 9, static_cast<int>(st),
+                 s.slam.landmarks(), double(s.slam.cov(0, 0)), double(s.slam.cov(0, 1)), double(s.slam.cov(0, 2)),
+                 double(s.slam.cov(1, 1)), double(s.slam.cov(1, 2)), double(s.slam.cov(2, 2)));
+    for (int j = 0; j < s.slam.landmarks(); ++j) {
+      const int l = 3 + 2 * j;
+      std::fprintf(stderr, "  l%d (%g %g) P [%g %g; %g]\n", j, double(s.slam.x(l)), double(s.slam.x(l + 1)),
+                  double(s.slam.cov(l, l)), double(s.slam.cov(l, l + 1)), double(s.slam.cov(l + 1, l + 1)));
+    }
+#endif
     if (mutates && st != Status::kOk) require(filter_before.same(s.slam));  // no state change on error
     if (filter_ready) check_filter(s.slam);
   }
