@@ -80,13 +80,15 @@ class TableReader {
       // The token starts with a non-blank character, so strtod/strtol cannot run past the line.
       char* stop = nullptr;
       errno = 0;
+      bool out_of_int = false;  // the callers convert integer fields to int
       if (integer_[static_cast<std::size_t>(k)]) {
         const long v = std::strtol(p, &stop, 10);
+        out_of_int = v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max();
         f[static_cast<std::size_t>(k)] = static_cast<double>(v);
       } else {
         f[static_cast<std::size_t>(k)] = std::strtod(p, &stop);
       }
-      if (stop == p || (stop < e && !is_blank(*stop)) || errno == ERANGE ||
+      if (stop == p || (stop < e && !is_blank(*stop)) || errno == ERANGE || out_of_int ||
           !std::isfinite(f[static_cast<std::size_t>(k)])) {
         const char* t = p;
         while (t < e && !is_blank(*t)) ++t;

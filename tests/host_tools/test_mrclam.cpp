@@ -370,3 +370,11 @@ TEST_CASE("MRCLAM: odometry against ground truth is plausible") {
   }
   CHECK_THROWS_AS(estimate_odometry_noise(loaded(6).robots, 0.0), std::invalid_argument);
 }
+
+// Found by tests/fuzz/fuzz_readers: an integer field beyond int's range was converted to int (UB).
+TEST_CASE("MRCLAM: an integer field beyond int's range is an error, not a conversion") {
+  TempDir d;
+  d.write("Barcodes.dat", std::string(kHeader) + "1 5\n2 10000000000001\n");
+  const std::string e = error_of([&] { (void)load_dataset(d.path.string()); });
+  CHECK(e.find("Barcodes.dat:6: field 2 '10000000000001' is not an integer") != std::string::npos);
+}

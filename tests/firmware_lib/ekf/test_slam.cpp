@@ -3,7 +3,9 @@
 // run; bad input and capacity change no state; no allocation.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -392,4 +394,44 @@ TEST_CASE_TEMPLATE("SlamStep: configuration, outcomes, no allocation", T, float,
   CHECK(res->feature[0] == 0);
   CHECK(s->slam().landmarks() == 1);
   CHECK(s->slam().hits(0) == 2);  // confirmed by the second pairing
+}
+
+// Found by tests/fuzz/fuzz_associate: a finite range near the scalar's max overflowed the new
+// landmark's covariance, and augment() returned kOk with Inf in P.
+TEST_CASE_TEMPLATE("augment: a range that would overflow the state is refused, nothing changed", T, float, double) {
+  auto s = std::make_unique<Slam<T, EB>>();
+  Mat3<T> P0 = Mat3<T>::Identity() * T(0.01);
+  REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, P0) == Status::kOk);
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  FeatureId id = 77;
+  REQUIRE(s->augment(Vec2<T>(T(3), T(0.4)), R, id) == Status::kOk);
+  std::vector<unsigned char> before(sizeof(*s));  // bytes, padding included
+  std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+  id = 77;
+  CHECK(s->augment(Vec2<T>(std::numeric_limits<T>::max() / T(4), T(0.4)), R, id) == Status::kNonFinite);
+  CHECK(id == 77);
+  CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+  CHECK(s->landmarks() == 1);
+  for (int r = 0; r < s->dim(); ++r)
+    for (int c = 0; c < s->dim(); ++c) CHECK(std::isfinite(s->cov(r, c)));
+}
+
+// Found by tests/fuzz/fuzz_associate: finite odometry whose sigma squared overflows gave an Inf
+// pose covariance, and predict() returned kOk.
+TEST_CASE_TEMPLATE("predict: odometry that would overflow the covariance is refused, nothing changed", T, float,
+                   double) {
+  auto s = std::make_unique<Slam<T, EB>>();
+  REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  FeatureId id = 0;
+  REQUIRE(s->augment(Vec2<T>(T(3), T(0.4)), R, id) == Status::kOk);
+  std::vector<unsigned char> before(sizeof(*s));  // bytes, padding included
+  std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+  const T huge = std::numeric_limits<T>::max() / T(4);
+  CHECK(s->predict(Odometry<T>{T(0.5), T(0.1), T(0.1), huge, T(0.01)}) == Status::kNonFinite);
+  CHECK(s->predict(Odometry<T>{huge, T(0.1), T(1), T(0.05), T(0.01)}) == Status::kNonFinite);
+  CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+  CHECK(s->predict(Odometry<T>{T(0.5), T(0.1), T(0.1), T(0.05), T(0.01)}) == Status::kOk);
 }

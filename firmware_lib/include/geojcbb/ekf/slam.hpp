@@ -181,7 +181,8 @@ class Slam {
   T cov(int r, int c) const { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
 
   /// Moves the robot by one odometry interval.
-  /// @return kOk; kNonFinite; kInvalidInput for dt < 0 or a negative standard deviation.
+  /// @return kOk; kNonFinite (also when the new pose or covariance would overflow); kInvalidInput
+  ///         for dt < 0 or a negative standard deviation. No state changes unless kOk.
   [[nodiscard]] Status predict(const Odometry<T>& u) {
     if (!std::isfinite(u.v_mps) || !std::isfinite(u.w_radps) || !std::isfinite(u.dt_s) ||
         !std::isfinite(u.sigma_v_mps) || !std::isfinite(u.sigma_w_radps)) {
@@ -198,6 +199,14 @@ class Slam {
     }
     const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
     const Mat3<T> Prr = F * block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
+    // Finite inputs can still overflow (speeds or sigmas near the scalar's max): check the new
+    // pose and covariance before writing any of them.
+    if (!std::isfinite(next.x) || !std::isfinite(next.y) || !std::isfinite(next.theta) || !Prr.allFinite()) {
+      return Status::kNonFinite;
+    }
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+      if (!(F * block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
+    }
     set_block<3, 3>(0, 0, T(0.5) * (Prr + Prr.transpose()));
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
       const int l = Layout::landmark(j);
@@ -374,9 +383,10 @@ class Slam {
   /// Adds a landmark observed at z = (range, bearing) with noise R from the current pose.
   /// The landmark starts tentative with one hit (see LandmarkPolicy).
   /// @param[out] id  the new landmark's id (stable for the map's life; never reused)
-  /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped or the ids are used up; kNonFinite;
-  ///         kInvalidInput for a negative range; kNotPositiveDefinite for R. No state changes
-  ///         unless kOk.
+  /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped or the ids are used up; kNonFinite
+  ///         (also when the new landmark's mean or covariance would overflow); kInvalidInput for a
+  ///         negative range; kNotPositiveDefinite for R (or a new block that rounding left not
+  ///         positive definite). No state changes unless kOk.
   [[nodiscard]] Status augment(const Vec2<T>& z, const Mat2<T>& R, FeatureId& id) {
     if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
     if (z.x() < T(0)) return Status::kInvalidInput;
@@ -387,6 +397,18 @@ class Slam {
     const Vec2<T> l = inverse_observe(pose(), z, &Jp, &Jz);
     const int n = dim();
     const int k = n;  // first row of the new landmark
+    // A finite z can still overflow (a range near the scalar's max): check the new mean and
+    // covariance before writing any of them.
+    const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
+    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose())))) return Status::kNotPositiveDefinite;  // R at rounding's edge
+    for (int c = 0; c < n; ++c) {  // <= kMaxState
+      for (int u = 0; u < 2; ++u) {
+        T s = T(0);
+        for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
+        if (!std::isfinite(s)) return Status::kNonFinite;
+      }
+    }
     for (int c = 0; c < n; ++c) {  // <= kMaxState: P_lx = Jp P_rx
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
@@ -395,7 +417,6 @@ class Slam {
         P(c, k + u) = s;
       }
     }
-    const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
     add_bookkeeping(l);
     id = next_id_++;
@@ -410,6 +431,7 @@ class Slam {
   ///         unless kOk.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose())))) return Status::kNotPositiveDefinite;  // R at rounding's edge
     if (!is_spd(Pll)) return Status::kNotPositiveDefinite;
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
