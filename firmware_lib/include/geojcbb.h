@@ -33,8 +33,9 @@ extern "C" {
 #define GEOJCBB_STORAGE_ALIGN 16
 #define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 38784
 #define GEOJCBB_SLAM_STORAGE_SIZE 111376
-/* A union with an aligned member would need C11; this array of 16-byte units is aligned on every
- * ABI whose long double or double is, and the init calls check the address in any case. */
+/* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
+ * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
+ * check the address in any case. */
 #define GEOJCBB_ALIGNED_STORAGE(name, size)                                              \
   union {                                                                               \
     unsigned char bytes[size];                                                          \

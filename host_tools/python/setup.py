@@ -2,6 +2,7 @@
 only: no CMake, no download). Objects and egg-info go to a scratch directory, never next to the
 sources. Metadata: pyproject.toml. docs/python.md."""
 import os
+import shutil
 import subprocess
 import tempfile
 
@@ -41,4 +42,7 @@ ext = Extension(
 )
 
 SCRATCH = tempfile.mkdtemp(prefix="geojcbb_build_")
-setup(ext_modules=[ext], options={"build": {"build_base": SCRATCH}, "egg_info": {"egg_base": SCRATCH}})
+try:
+    setup(ext_modules=[ext], options={"build": {"build_base": SCRATCH}, "egg_info": {"egg_base": SCRATCH}})
+finally:
+    shutil.rmtree(SCRATCH, ignore_errors=True)
