@@ -2,8 +2,9 @@
 #   python3 -m venv --system-site-packages VENV && VENV/bin/pip install --no-build-isolation --no-index SRC
 # then the installed module imports and associates. PYTHON, SRC, VENV (scratch, under the build tree).
 file(REMOVE_RECURSE ${VENV})
+get_filename_component(parent ${VENV} DIRECTORY)  # not the source folder: its geojcbb/ would shadow
 function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err WORKING_DIRECTORY ${VENV}/..)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err WORKING_DIRECTORY ${parent})
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
   endif()
