@@ -1,0 +1,311 @@
+// The C API (geojcbb.h) over the float pipeline and the SLAM step at DefaultBounds. The objects are
+// placed in the caller's storage with placement new (no heap); every C mirror of a C++ enum or
+// capacity is checked against it here, as are the storage sizes the header publishes.
+#include "geojcbb.h"
+
+#include <cstring>
+#include <new>
+
+#include "geojcbb/node/slam_step.hpp"
+#include "geojcbb/pipeline_f32.hpp"
+
+namespace {
+
+using namespace geojcbb;
+using B = DefaultBounds;
+
+static_assert(GEOJCBB_MAX_OBSERVATIONS == B::kMaxObservations && GEOJCBB_MAX_CANDIDATES == B::kMaxCandidates &&
+                  GEOJCBB_MAX_GROUPS == B::kMaxGroups && GEOJCBB_MAX_JCBB_NODES == B::kMaxJcbbNodes &&
+                  GEOJCBB_MAX_LANDMARKS == B::kMaxLandmarks,
+              "geojcbb.h capacities differ from DefaultBounds");
+static_assert(GEOJCBB_NEW_FEATURE == kNewFeature && GEOJCBB_UNMATCHED == kUnmatched, "feature codes");
+
+#define GEOJCBB_SAME(c, cpp) static_assert(static_cast<int>(c) == static_cast<int>(cpp), #c " != " #cpp)
+GEOJCBB_SAME(GEOJCBB_OK, Status::kOk);
+GEOJCBB_SAME(GEOJCBB_NON_FINITE, Status::kNonFinite);
+GEOJCBB_SAME(GEOJCBB_INVALID_INPUT, Status::kInvalidInput);
+GEOJCBB_SAME(GEOJCBB_CAPACITY_EXCEEDED, Status::kCapacityExceeded);
+GEOJCBB_SAME(GEOJCBB_NOT_SYMMETRIC, Status::kNotSymmetric);
+GEOJCBB_SAME(GEOJCBB_NOT_POSITIVE_DEFINITE, Status::kNotPositiveDefinite);
+GEOJCBB_SAME(GEOJCBB_NO_CONVERGENCE, Status::kNoConvergence);
+// The last C status is the last C++ one: a new Status value must be added to geojcbb.h.
+static_assert(to_string(static_cast<Status>(GEOJCBB_NO_CONVERGENCE + 1))[0] == 'u', "a Status missing in geojcbb.h");
+GEOJCBB_SAME(GEOJCBB_STRATEGY_ICNN, Strategy::kIcnn);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_JCBB, Strategy::kJcbb);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_KJCBB, Strategy::kKjcbb);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_DFJCBB, Strategy::kDfjcbb);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_GEMJCBB, Strategy::kGemjcbb);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_GEOJCBB, Strategy::kGeojcbb);
+static_assert(GEOJCBB_STRATEGY_GEOJCBB + 1 == kStrategyCount, "a Strategy missing in geojcbb.h");
+GEOJCBB_SAME(GEOJCBB_OUTCOME_PAIRED, node::Outcome::kPaired);
+GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_LANDMARK, node::Outcome::kNewLandmark);
+GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_DROPPED, node::Outcome::kNewDropped);
+GEOJCBB_SAME(GEOJCBB_OUTCOME_UNMATCHED, node::Outcome::kUnmatched);
+GEOJCBB_SAME(GEOJCBB_OUTCOME_NOT_AUGMENTED, node::Outcome::kNotAugmented);
+#undef GEOJCBB_SAME
+
+constexpr std::uint32_t kAssociatorMagic = 0x6A636231u;  // "jcb1"
+constexpr std::uint32_t kSlamMagic = 0x736C6D31u;        // "slm1"
+
+struct Associator {
+  std::uint32_t magic = kAssociatorMagic;
+  AssociationConfigF cfg;
+  ObservationsF obs;
+  PredictionF pred;
+  WorkspaceF ws;
+  AssociationF out;
+};
+
+struct Slam {
+  std::uint32_t magic = kSlamMagic;
+  node::SlamStep<float, B> step;
+  ObservationsF obs;
+  node::StepResult<float, B> res;
+};
+
+// The header's sizes are exact, so a change of layout (new capacity, new workspace member) shows
+// here first: update GEOJCBB_*_STORAGE_SIZE in geojcbb.h to the size in the message.
+template <std::size_t Have, std::size_t Want>
+constexpr bool storage_size_matches() {
+  static_assert(Have == Want, "geojcbb.h: GEOJCBB_*_STORAGE_SIZE differs from sizeof (see the template arguments)");
+  return true;
+}
+static_assert(storage_size_matches<GEOJCBB_ASSOCIATOR_STORAGE_SIZE, sizeof(Associator)>());
+static_assert(storage_size_matches<GEOJCBB_SLAM_STORAGE_SIZE, sizeof(Slam)>());
+static_assert(GEOJCBB_STORAGE_ALIGN == alignof(Associator) && GEOJCBB_STORAGE_ALIGN == alignof(Slam),
+              "geojcbb.h: GEOJCBB_STORAGE_ALIGN differs from alignof");
+
+geojcbb_status c_status(Status s) { return static_cast<geojcbb_status>(s); }
+
+bool storage_ok(const void* p, std::size_t size, std::size_t need) {
+  return p != nullptr && size >= need && reinterpret_cast<std::uintptr_t>(p) % GEOJCBB_STORAGE_ALIGN == 0;
+}
+
+StrategyParams<float> to_params(const geojcbb_strategy_params& p) {
+  StrategyParams<float> q;
+  q.confidence = p.confidence;
+  q.local_radius_m = p.local_radius_m;
+  q.groups = p.groups;
+  q.dbscan_eps_m = p.dbscan_eps_m;
+  q.dbscan_min_points = p.dbscan_min_points;
+  q.joint_recheck = p.joint_recheck != 0;
+  q.condition_groups = p.condition_groups != 0;
+  q.node_budget = p.node_budget;
+  q.ambiguity_margin = p.ambiguity_margin;
+  q.new_if_candidates_taken = p.new_if_candidates_taken != 0;
+  return q;
+}
+
+bool strategy_ok(int s) { return s >= 0 && s < kStrategyCount; }
+
+geojcbb_diagnostics to_c(const AssociationDiagnostics& d) {
+  geojcbb_diagnostics c;
+  c.jcbb_nodes = d.jcbb_nodes;
+  c.candidates_in_region = d.candidates_in_region;
+  c.compatible_pairs = d.compatible_pairs;
+  c.node_budget_hit = d.node_budget_hit ? 1 : 0;
+  c.groups = d.groups;
+  c.cluster_iterations = d.cluster_iterations;
+  c.cluster_bound_hit = d.cluster_bound_hit ? 1 : 0;
+  c.merge_conflicts = d.merge_conflicts;
+  c.recheck_failed = d.recheck_failed ? 1 : 0;
+  c.recheck_dropped = d.recheck_dropped;
+  c.declined = d.declined;
+  return c;
+}
+
+/// Copies m observations into obs. @return kOk; kInvalidInput (null arrays, m < 0);
+/// kCapacityExceeded. Values are validated by associate().
+Status load_observations(int m, const float* z, const float* R, ObservationsF& obs) {
+  if (m < 0 || (m > 0 && (z == nullptr || R == nullptr))) return Status::kInvalidInput;
+  if (m > B::kMaxObservations) return Status::kCapacityExceeded;
+  obs.count = m;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    obs.z[i] = Vec2<float>(z[2 * i], z[2 * i + 1]);
+    obs.R[i] << R[4 * i], R[4 * i + 1], R[4 * i + 2], R[4 * i + 3];
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* geojcbb_status_name(geojcbb_status s) { return to_string(static_cast<Status>(s)); }
+
+void geojcbb_strategy_params_default(geojcbb_strategy_params* p) {
+  if (p == nullptr) return;
+  const StrategyParams<float> d;
+  p->confidence = d.confidence;
+  p->local_radius_m = d.local_radius_m;
+  p->groups = d.groups;
+  p->dbscan_eps_m = d.dbscan_eps_m;
+  p->dbscan_min_points = d.dbscan_min_points;
+  p->joint_recheck = d.joint_recheck ? 1 : 0;
+  p->condition_groups = d.condition_groups ? 1 : 0;
+  p->node_budget = d.node_budget;
+  p->ambiguity_margin = d.ambiguity_margin;
+  p->new_if_candidates_taken = d.new_if_candidates_taken ? 1 : 0;
+}
+
+geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strategy strategy,
+                                       const geojcbb_strategy_params* params, geojcbb_associator** out) {
+  if (!storage_ok(storage, size, sizeof(Associator)) || params == nullptr || out == nullptr ||
+      !strategy_ok(static_cast<int>(strategy))) {
+    return GEOJCBB_INVALID_INPUT;
+  }
+  AssociationConfigF cfg;
+  const Status s = make_strategy(static_cast<Strategy>(strategy), to_params(*params), cfg);
+  if (s != Status::kOk) return c_status(s);
+  Associator* a = new (storage) Associator();
+  a->cfg = cfg;
+  *out = reinterpret_cast<geojcbb_associator*>(a);
+  return GEOJCBB_OK;
+}
+
+geojcbb_status geojcbb_associate(geojcbb_associator* handle, int m, const float* z, const float* R, int n,
+                                 const int32_t* ids, const float* h, const float* C, geojcbb_association* out) {
+  Associator* a = reinterpret_cast<Associator*>(handle);
+  if (a == nullptr || a->magic != kAssociatorMagic || out == nullptr || n < 0 ||
+      (n > 0 && (ids == nullptr || h == nullptr || C == nullptr))) {
+    return GEOJCBB_INVALID_INPUT;
+  }
+  if (n > B::kMaxCandidates) return GEOJCBB_CAPACITY_EXCEEDED;
+  Status s = load_observations(m, z, R, a->obs);
+  if (s != Status::kOk) return c_status(s);
+  PredictionF& p = a->pred;
+  p.count = n;
+  p.C.resize(2 * n, 2 * n);
+  for (int j = 0; j < n; ++j) {  // <= kMaxCandidates
+    p.id[j] = ids[j];
+    p.h[j] = Vec2<float>(h[2 * j], h[2 * j + 1]);
+  }
+  for (int r = 0; r < 2 * n; ++r)    // <= 2 kMaxCandidates
+    for (int c = 0; c < 2 * n; ++c)  // <= 2 kMaxCandidates
+      p.C(r, c) = C[static_cast<std::size_t>(r) * static_cast<std::size_t>(2 * n) + static_cast<std::size_t>(c)];
+  s = associate_f32(a->obs, p, a->cfg, a->ws, a->out);
+  if (s != Status::kOk) return c_status(s);
+  const AssociationF& o = a->out;
+  out->count = o.count;
+  for (int i = 0; i < o.count; ++i) {  // <= kMaxObservations
+    out->feature[i] = o.feature[i];
+    out->candidate[i] = o.candidate[i];
+    out->d2[i] = o.d2[i];
+  }
+  out->pairings = o.pairings;
+  out->joint_d2 = o.joint_d2;
+  out->jointly_compatible = o.jointly_compatible ? 1 : 0;
+  out->diag = to_c(o.diag);
+  return GEOJCBB_OK;
+}
+
+void geojcbb_slam_settings_default(geojcbb_slam_settings* s) {
+  if (s == nullptr) return;
+  const node::StepSettings<float> d;
+  s->strategy = static_cast<geojcbb_strategy>(d.strategy);
+  geojcbb_strategy_params_default(&s->params);
+  s->new_landmark_level = d.new_landmark_level;
+  s->min_range_m = d.view.min_range_m;
+  s->max_range_m = d.view.max_range_m;
+  s->half_fov_rad = d.view.half_fov_rad;
+  s->confirm_hits = d.policy.confirm_hits;
+  s->max_misses = d.policy.max_misses;
+  s->max_tentative_reviews = d.policy.max_tentative_reviews;
+  s->miss_probability = d.policy.miss_probability;
+  s->static_gate_d2 = d.policy.static_gate_d2;
+  s->first_estimates_jacobians = d.filter.first_estimates_jacobians ? 1 : 0;
+  s->augment = d.augment ? 1 : 0;
+}
+
+geojcbb_status geojcbb_slam_init(void* storage, size_t size, geojcbb_slam** out) {
+  if (!storage_ok(storage, size, sizeof(Slam)) || out == nullptr) return GEOJCBB_INVALID_INPUT;
+  *out = reinterpret_cast<geojcbb_slam*>(new (storage) Slam());
+  return GEOJCBB_OK;
+}
+
+static Slam* slam_of(geojcbb_slam* handle) {
+  Slam* s = reinterpret_cast<Slam*>(handle);
+  return s != nullptr && s->magic == kSlamMagic ? s : nullptr;
+}
+
+geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* in) {
+  Slam* s = slam_of(handle);
+  if (s == nullptr || in == nullptr || !strategy_ok(static_cast<int>(in->strategy))) return GEOJCBB_INVALID_INPUT;
+  node::StepSettings<float> st;
+  st.strategy = static_cast<Strategy>(in->strategy);
+  st.params = to_params(in->params);
+  st.new_landmark_level = in->new_landmark_level;
+  st.view.min_range_m = in->min_range_m;
+  st.view.max_range_m = in->max_range_m;
+  st.view.half_fov_rad = in->half_fov_rad;
+  st.policy.confirm_hits = in->confirm_hits;
+  st.policy.max_misses = in->max_misses;
+  st.policy.max_tentative_reviews = in->max_tentative_reviews;
+  st.policy.miss_probability = in->miss_probability;
+  st.policy.static_gate_d2 = in->static_gate_d2;
+  st.filter.first_estimates_jacobians = in->first_estimates_jacobians != 0;
+  st.augment = in->augment != 0;
+  return c_status(s->step.configure(st));
+}
+
+geojcbb_status geojcbb_slam_reset(geojcbb_slam* handle, const float x0[3], const float P0[9]) {
+  Slam* s = slam_of(handle);
+  if (s == nullptr || x0 == nullptr || P0 == nullptr) return GEOJCBB_INVALID_INPUT;
+  Mat3<float> P;
+  P << P0[0], P0[1], P0[2], P0[3], P0[4], P0[5], P0[6], P0[7], P0[8];
+  return c_status(s->step.reset(Pose2<float>{x0[0], x0[1], x0[2]}, P));
+}
+
+geojcbb_status geojcbb_slam_predict(geojcbb_slam* handle, float v_mps, float w_radps, float dt_s, float sigma_v_mps,
+                                    float sigma_w_radps) {
+  Slam* s = slam_of(handle);
+  if (s == nullptr) return GEOJCBB_INVALID_INPUT;
+  return c_status(s->step.predict(ekf::Odometry<float>{v_mps, w_radps, dt_s, sigma_v_mps, sigma_w_radps}));
+}
+
+geojcbb_status geojcbb_slam_step(geojcbb_slam* handle, int m, const float* z, const float* R,
+                                 geojcbb_step_result* out) {
+  Slam* s = slam_of(handle);
+  if (s == nullptr || out == nullptr) return GEOJCBB_INVALID_INPUT;
+  Status st = load_observations(m, z, R, s->obs);
+  if (st != Status::kOk) return c_status(st);
+  st = s->step.step(s->obs, s->res);
+  if (st != Status::kOk) return c_status(st);
+  out->count = s->res.count;
+  for (int i = 0; i < s->res.count; ++i) {  // <= kMaxObservations
+    out->outcome[i] = static_cast<std::uint8_t>(s->res.outcome[i]);
+    out->feature[i] = s->res.feature[i];
+    out->d2[i] = s->res.d2[i];
+  }
+  out->diag = to_c(s->res.diag);
+  return GEOJCBB_OK;
+}
+
+void geojcbb_slam_pose(const geojcbb_slam* handle, float x[3]) {
+  const Slam* s = reinterpret_cast<const Slam*>(handle);
+  if (s == nullptr || x == nullptr || s->magic != kSlamMagic) return;
+  const Pose2<float> p = s->step.slam().pose();
+  x[0] = p.x;
+  x[1] = p.y;
+  x[2] = p.theta;
+}
+
+int geojcbb_slam_landmarks(const geojcbb_slam* handle) {
+  const Slam* s = reinterpret_cast<const Slam*>(handle);
+  return s != nullptr && s->magic == kSlamMagic ? s->step.slam().landmarks() : 0;
+}
+
+geojcbb_status geojcbb_slam_landmark(const geojcbb_slam* handle, int j, int32_t* id, float xy[2]) {
+  const Slam* s = reinterpret_cast<const Slam*>(handle);
+  if (s == nullptr || s->magic != kSlamMagic || id == nullptr || xy == nullptr || j < 0 ||
+      j >= s->step.slam().landmarks()) {
+    return GEOJCBB_INVALID_INPUT;
+  }
+  *id = s->step.slam().id(j);
+  const Vec2<float> l = s->step.slam().landmark(j);
+  xy[0] = l.x();
+  xy[1] = l.y();
+  return GEOJCBB_OK;
+}
+
+}  // extern "C"

@@ -1,0 +1,109 @@
+"""Type stubs of geojcbb._core (host_tools/python/geojcbb_py.cpp). Units in each docstring."""
+from typing import Any, Dict, List, Optional, Tuple, TypedDict
+
+import numpy as np
+import numpy.typing as npt
+
+NEW_FEATURE: int  # -1: nothing compatible (a new landmark, or clutter)
+UNMATCHED: int  # -2: compatible candidates but left unpaired (ambiguous)
+MAX_OBSERVATIONS: int  # 64
+MAX_CANDIDATES: int  # 128
+MAX_GROUPS: int  # 8
+MAX_JCBB_NODES: int  # 200000
+MAX_LANDMARKS: int  # 500
+STRATEGIES: List[str]  # ["ICNN", "JCBB", "KJCBB", "DFJCBB", "GEMJCBB", "GEOJCBB"]
+
+
+class GeojcbbError(RuntimeError):
+    """A library call returned a Status other than kOk; .status holds its name (e.g. "kNonFinite")."""
+    status: str
+
+
+class Diagnostics(TypedDict):
+    jcbb_nodes: int
+    candidates_in_region: int
+    compatible_pairs: int
+    node_budget_hit: bool
+    groups: int
+    cluster_iterations: int
+    cluster_bound_hit: bool
+    merge_conflicts: int
+    recheck_failed: bool
+    recheck_dropped: int
+    declined: int
+
+
+class AssociationResult(TypedDict):
+    feature: npt.NDArray[np.int32]  # (m,) feature id, NEW_FEATURE or UNMATCHED
+    candidate: npt.NDArray[np.int32]  # (m,) index into h/ids, or -1
+    d2: npt.NDArray[np.float64]  # (m,) individual Mahalanobis d2 (unpaired: nearest, or inf)
+    pairings: int
+    joint_d2: float  # joint Mahalanobis d2 of the hypothesis
+    jointly_compatible: bool
+    diagnostics: Diagnostics
+
+
+def associate(z: npt.ArrayLike, R: npt.ArrayLike, h: npt.ArrayLike, C: npt.ArrayLike, ids: npt.ArrayLike,
+              strategy: str = "GEOJCBB", **options: Any) -> AssociationResult:
+    """z (m, 2) [m, rad], R (m, 2, 2) [m^2, rad^2], h (n, 2) [m, rad], C (2n, 2n), ids (n,) >= 0.
+
+    Options: confidence, local_radius_m [m], groups, dbscan_eps_m [m], dbscan_min_points,
+    joint_recheck, condition_groups, node_budget, ambiguity_margin, new_if_candidates_taken.
+    Raises GeojcbbError with .status on bad input, TypeError on an unknown option.
+    """
+
+
+class StepResult(TypedDict):
+    outcome: List[str]  # paired | new_landmark | new_dropped | unmatched | not_augmented
+    feature: npt.NDArray[np.int32]  # landmark id, -1 when none
+    d2: npt.NDArray[np.float64]
+    diagnostics: Diagnostics
+
+
+class Slam:
+    """One EKF-SLAM step with data association (node::SlamStep<double, host bounds>)."""
+
+    def __init__(self, strategy: str = "GEOJCBB", *, local_radius_m: float, max_range_m: float,
+                 half_fov_rad: float = 3.14159265358979, min_range_m: float = 0.0,
+                 new_landmark_level: float = 0.999, augment: bool = True,
+                 first_estimates_jacobians: bool = True, **options: Any) -> None: ...
+    def reset(self, x0: npt.ArrayLike, P0: npt.ArrayLike) -> None:
+        """x0 = (x [m], y [m], theta [rad]); P0 (3, 3) [m^2, rad^2]."""
+    def predict(self, v_mps: float, w_radps: float, dt_s: float, sigma_v_mps: float, sigma_w_radps: float) -> None: ...
+    def step(self, z: npt.ArrayLike, R: npt.ArrayLike) -> StepResult: ...
+    @property
+    def pose(self) -> npt.NDArray[np.float64]:
+        """(x [m], y [m], theta [rad])"""
+    @property
+    def landmarks(self) -> Tuple[npt.NDArray[np.int32], npt.NDArray[np.float64]]:
+        """(ids (k,), positions (k, 2) [m])"""
+    @property
+    def covariance(self) -> npt.NDArray[np.float64]: ...
+
+
+class SimStep(TypedDict):
+    t_s: float
+    true_pose: Tuple[float, float, float]  # (x [m], y [m], theta [rad])
+    v_mps: float
+    w_radps: float
+    scan: bool
+    z: npt.NDArray[np.float64]  # (k, 2) [m, rad]
+    R: npt.NDArray[np.float64]  # (k, 2, 2)
+    truth: npt.NDArray[np.int32]  # (k,) landmark index, -1 for clutter
+
+
+class Simulator:
+    def __init__(self, scenario_path: str, seed: int = 1) -> None: ...
+    def step(self) -> Optional[SimStep]: ...
+    @property
+    def landmarks(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def dt_s(self) -> float: ...
+    @property
+    def sigma_v_mps(self) -> float: ...
+    @property
+    def sigma_w_radps(self) -> float: ...
+    @property
+    def max_range_m(self) -> float: ...
+    @property
+    def fov_rad(self) -> float: ...

@@ -1,0 +1,101 @@
+// The C++ side of the C API test: the same calls made through the C++ API (associate_f32 and
+// node::SlamStep<float, DefaultBounds>), so test_c_api.c can compare the answers bit for bit.
+#include <cstring>
+
+#include "geojcbb.h"
+#include "geojcbb/node/slam_step.hpp"
+#include "geojcbb/pipeline_f32.hpp"
+
+using namespace geojcbb;
+using B = DefaultBounds;
+
+namespace {
+StrategyParams<float> params_of(const geojcbb_strategy_params& p) {
+  StrategyParams<float> q;
+  q.confidence = p.confidence;
+  q.local_radius_m = p.local_radius_m;
+  q.groups = p.groups;
+  q.dbscan_eps_m = p.dbscan_eps_m;
+  q.dbscan_min_points = p.dbscan_min_points;
+  q.joint_recheck = p.joint_recheck != 0;
+  q.condition_groups = p.condition_groups != 0;
+  q.node_budget = p.node_budget;
+  q.ambiguity_margin = p.ambiguity_margin;
+  q.new_if_candidates_taken = p.new_if_candidates_taken != 0;
+  return q;
+}
+ObservationsF g_obs;
+PredictionF g_pred;
+WorkspaceF g_ws;
+AssociationF g_out;
+node::SlamStep<float, B> g_step;
+node::StepResult<float, B> g_res;
+
+void load(int m, const float* z, const float* R) {
+  g_obs.count = m;
+  for (int i = 0; i < m; ++i) {
+    g_obs.z[i] = Vec2<float>(z[2 * i], z[2 * i + 1]);
+    g_obs.R[i] << R[4 * i], R[4 * i + 1], R[4 * i + 2], R[4 * i + 3];
+  }
+}
+}  // namespace
+
+extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int m, const float* z, const float* R,
+                             int n, const int32_t* ids, const float* h, const float* C, int32_t* feature,
+                             float* d2, float* joint_d2, int* pairings, uint32_t* nodes) {
+  AssociationConfigF cfg;
+  Status s = make_strategy(static_cast<Strategy>(strategy), params_of(*p), cfg);
+  if (s != Status::kOk) return static_cast<int>(s);
+  load(m, z, R);
+  g_pred.count = n;
+  g_pred.C.resize(2 * n, 2 * n);
+  for (int j = 0; j < n; ++j) {
+    g_pred.id[j] = ids[j];
+    g_pred.h[j] = Vec2<float>(h[2 * j], h[2 * j + 1]);
+  }
+  for (int r = 0; r < 2 * n; ++r)
+    for (int c = 0; c < 2 * n; ++c) g_pred.C(r, c) = C[r * 2 * n + c];
+  s = associate_f32(g_obs, g_pred, cfg, g_ws, g_out);
+  if (s != Status::kOk) return static_cast<int>(s);
+  for (int i = 0; i < m; ++i) {
+    feature[i] = g_out.feature[i];
+    d2[i] = g_out.d2[i];
+  }
+  *joint_d2 = g_out.joint_d2;
+  *pairings = g_out.pairings;
+  *nodes = g_out.diag.jcbb_nodes;
+  return 0;
+}
+
+extern "C" int ref_slam_start(int strategy, float radius_m, float max_range_m, float half_fov_rad, const float x0[3],
+                              const float P0[9]) {
+  node::StepSettings<float> st;
+  st.strategy = static_cast<Strategy>(strategy);
+  st.params.local_radius_m = radius_m;
+  st.view.max_range_m = max_range_m;
+  st.view.half_fov_rad = half_fov_rad;
+  Status s = g_step.configure(st);
+  if (s != Status::kOk) return static_cast<int>(s);
+  Mat3<float> P;
+  P << P0[0], P0[1], P0[2], P0[3], P0[4], P0[5], P0[6], P0[7], P0[8];
+  return static_cast<int>(g_step.reset(Pose2<float>{x0[0], x0[1], x0[2]}, P));
+}
+
+extern "C" int ref_slam_predict(float v, float w, float dt, float sv, float sw) {
+  return static_cast<int>(g_step.predict(ekf::Odometry<float>{v, w, dt, sv, sw}));
+}
+
+extern "C" int ref_slam_step(int m, const float* z, const float* R, int32_t* feature, uint8_t* outcome, float pose[3]) {
+  load(m, z, R);
+  const Status s = g_step.step(g_obs, g_res);
+  if (s != Status::kOk) return static_cast<int>(s);
+  for (int i = 0; i < m; ++i) {
+    feature[i] = g_res.feature[i];
+    outcome[i] = static_cast<uint8_t>(g_res.outcome[i]);
+  }
+  const Pose2<float> x = g_step.slam().pose();
+  pose[0] = x.x;
+  pose[1] = x.y;
+  pose[2] = x.theta;
+  return 0;
+}
