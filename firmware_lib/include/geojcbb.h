@@ -31,8 +31,8 @@ extern "C" {
  * the buffer given is large and aligned enough. Declare storage as, for example:
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
-#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 38784
-#define GEOJCBB_SLAM_STORAGE_SIZE 111376
+#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 45520
+#define GEOJCBB_SLAM_STORAGE_SIZE 118144
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */
@@ -65,7 +65,8 @@ typedef enum geojcbb_strategy {
   GEOJCBB_STRATEGY_KJCBB = 2,
   GEOJCBB_STRATEGY_DFJCBB = 3,
   GEOJCBB_STRATEGY_GEMJCBB = 4,
-  GEOJCBB_STRATEGY_GEOJCBB = 5
+  GEOJCBB_STRATEGY_GEOJCBB = 5,
+  GEOJCBB_STRATEGY_PCJCBB = 6 /* GEOJCBB + pairwise verify and pose-free seed (docs/consistency.md) */
 } geojcbb_strategy;
 
 /* Mirrors geojcbb::StrategyParams<float>; geojcbb_strategy_params_default() fills the defaults. */
@@ -80,6 +81,7 @@ typedef struct geojcbb_strategy_params {
   int node_budget;               /* 0: GEOJCBB_MAX_JCBB_NODES */
   double ambiguity_margin;       /* 0: off */
   int new_if_candidates_taken;   /* bool (0) */
+  int verify;                    /* bool (0): pairwise verification in any preset (PCJCBB: always) */
 } geojcbb_strategy_params;
 
 void geojcbb_strategy_params_default(geojcbb_strategy_params* p);

@@ -36,7 +36,9 @@ GEOJCBB_SAME(GEOJCBB_STRATEGY_KJCBB, Strategy::kKjcbb);
 GEOJCBB_SAME(GEOJCBB_STRATEGY_DFJCBB, Strategy::kDfjcbb);
 GEOJCBB_SAME(GEOJCBB_STRATEGY_GEMJCBB, Strategy::kGemjcbb);
 GEOJCBB_SAME(GEOJCBB_STRATEGY_GEOJCBB, Strategy::kGeojcbb);
-static_assert(GEOJCBB_STRATEGY_GEOJCBB + 1 == kStrategyCount, "a Strategy missing in geojcbb.h");
+GEOJCBB_SAME(GEOJCBB_STRATEGY_PCJCBB, Strategy::kPcjcbb);
+GEOJCBB_SAME(GEOJCBB_STRATEGY_PCJCBB, Strategy::kPcjcbb);
+static_assert(GEOJCBB_STRATEGY_PCJCBB + 1 == kStrategyCount, "a Strategy missing in geojcbb.h");
 GEOJCBB_SAME(GEOJCBB_OUTCOME_PAIRED, node::Outcome::kPaired);
 GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_LANDMARK, node::Outcome::kNewLandmark);
 GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_DROPPED, node::Outcome::kNewDropped);
@@ -93,6 +95,7 @@ StrategyParams<float> to_params(const geojcbb_strategy_params& p) {
   q.node_budget = p.node_budget;
   q.ambiguity_margin = p.ambiguity_margin;
   q.new_if_candidates_taken = p.new_if_candidates_taken != 0;
+  q.verify = p.verify != 0;
   return q;
 }
 
@@ -146,6 +149,7 @@ void geojcbb_strategy_params_default(geojcbb_strategy_params* p) {
   p->node_budget = d.node_budget;
   p->ambiguity_margin = d.ambiguity_margin;
   p->new_if_candidates_taken = d.new_if_candidates_taken ? 1 : 0;
+  p->verify = d.verify ? 1 : 0;
 }
 
 geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strategy strategy,

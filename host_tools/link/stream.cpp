@@ -15,12 +15,13 @@ std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
   std::vector<Strategy> out;
   for (const std::string& n : names) {
     bool known = false;
-    for (int k = 0; k < kPaperStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
+    for (int k = 0; k < kStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
     if (!known) throw std::invalid_argument("unknown strategy " + n);
   }
-  for (int k = 0; k < kPaperStrategyCount; ++k) {
+  // No names: the papers' six; PCJCBB (and any later preset) when named.
+  for (int k = 0; k < kStrategyCount; ++k) {
     const Strategy s = static_cast<Strategy>(k);
-    bool take = names.empty();
+    bool take = names.empty() ? k < kPaperStrategyCount : false;
     for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
     if (take) out.push_back(s);
   }

@@ -70,6 +70,10 @@ StrategyParams<T> parse_options(const py::kwargs& kw) {
     else if (k == "node_budget") p.node_budget = py::cast<int>(v);
     else if (k == "ambiguity_margin") p.ambiguity_margin = py::cast<double>(v);
     else if (k == "new_if_candidates_taken") p.new_if_candidates_taken = py::cast<bool>(v);
+    else if (k == "verify") p.verify = py::cast<bool>(v);
+    else if (k == "seed_min_position_var_m2") p.seed_min_position_var_m2 = py::cast<double>(v);
+    else if (k == "consistency_wide_d2") p.consistency_wide_d2 = py::cast<double>(v);
+    else if (k == "consistency_pair_d2") p.consistency_pair_d2 = py::cast<double>(v);
     else throw py::type_error("unknown option '" + k + "'");
   }
   return p;
@@ -93,13 +97,15 @@ void load_observations(const Arr& z, const Arr& R, Observations<T, PyBounds>& ob
 }
 
 // A new StrategyParams field must be compared here (and parsed in parse_options).
-static_assert(sizeof(StrategyParams<T>) == 64, "StrategyParams changed: update same_params and parse_options");
+static_assert(sizeof(StrategyParams<T>) == 88, "StrategyParams changed: update same_params and parse_options");
 bool same_params(const StrategyParams<T>& a, const StrategyParams<T>& b) {
   return a.confidence == b.confidence && a.local_radius_m == b.local_radius_m && a.groups == b.groups &&
          a.dbscan_eps_m == b.dbscan_eps_m && a.dbscan_min_points == b.dbscan_min_points &&
          a.joint_recheck == b.joint_recheck && a.condition_groups == b.condition_groups &&
          a.node_budget == b.node_budget && a.ambiguity_margin == b.ambiguity_margin &&
-         a.new_if_candidates_taken == b.new_if_candidates_taken;
+         a.new_if_candidates_taken == b.new_if_candidates_taken && a.verify == b.verify &&
+         a.seed_min_position_var_m2 == b.seed_min_position_var_m2 &&
+         a.consistency_wide_d2 == b.consistency_wide_d2 && a.consistency_pair_d2 == b.consistency_pair_d2;
 }
 
 py::dict diagnostics(const AssociationDiagnostics& d) {

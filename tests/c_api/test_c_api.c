@@ -103,7 +103,7 @@ static int same_bits(const void* a, const void* b, size_t n) { return memcmp(a, 
 static void test_strategies_bit_for_bit(void) {
   static scene s;
   int strategy, k, compared = 0;
-  for (strategy = GEOJCBB_STRATEGY_ICNN; strategy <= GEOJCBB_STRATEGY_GEOJCBB; ++strategy) {
+  for (strategy = GEOJCBB_STRATEGY_ICNN; strategy <= GEOJCBB_STRATEGY_PCJCBB; ++strategy) {
     geojcbb_strategy_params p;
     geojcbb_associator* a = NULL;
     geojcbb_strategy_params_default(&p);

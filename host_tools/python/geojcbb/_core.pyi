@@ -48,7 +48,8 @@ def associate(z: npt.ArrayLike, R: npt.ArrayLike, h: npt.ArrayLike, C: npt.Array
     """z (m, 2) [m, rad], R (m, 2, 2) [m^2, rad^2], h (n, 2) [m, rad], C (2n, 2n), ids (n,) >= 0.
 
     Options: confidence, local_radius_m [m], groups, dbscan_eps_m [m], dbscan_min_points,
-    joint_recheck, condition_groups, node_budget, ambiguity_margin, new_if_candidates_taken.
+    joint_recheck, condition_groups, node_budget, ambiguity_margin, new_if_candidates_taken,
+    verify, seed_min_position_var_m2 [m^2], consistency_wide_d2, consistency_pair_d2.
     Raises GeojcbbError with .status on bad input, TypeError on an unknown option.
     """
 

@@ -21,7 +21,7 @@ namespace geojcbb {
 
 enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb, kPcjcbb };
 constexpr int kStrategyCount = 7;
-/// The papers' six (ICNN .. GEOJCBB); the wire protocol's strategy codes cover these only.
+/// The papers' six (ICNN .. GEOJCBB); PCJCBB is this project's preset (docs/consistency.md).
 constexpr int kPaperStrategyCount = 6;
 
 constexpr const char* to_string(Strategy s) {

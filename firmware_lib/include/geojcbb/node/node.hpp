@@ -39,7 +39,8 @@ constexpr bool same_strategies() {
          static_cast<int>(S::kKjcbb) == static_cast<int>(C::kKjcbb) &&
          static_cast<int>(S::kDfjcbb) == static_cast<int>(C::kDfjcbb) &&
          static_cast<int>(S::kGemjcbb) == static_cast<int>(C::kGemjcbb) &&
-         static_cast<int>(S::kGeojcbb) == static_cast<int>(C::kGeojcbb);
+         static_cast<int>(S::kGeojcbb) == static_cast<int>(C::kGeojcbb) &&
+         static_cast<int>(S::kPcjcbb) == static_cast<int>(C::kPcjcbb);
 }
 constexpr bool same_outcomes() {
   using P = proto::PairingOutcome;

@@ -143,8 +143,8 @@ struct Capabilities : Codec<Capabilities> {
 };
 
 /// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/node.hpp static_asserts it).
-enum class StrategyCode : std::uint8_t { kIcnn = 0, kJcbb = 1, kKjcbb = 2, kDfjcbb = 3, kGemjcbb = 4, kGeojcbb = 5 };
-constexpr std::uint8_t kStrategyCodeCount = 6;
+enum class StrategyCode : std::uint8_t { kIcnn = 0, kJcbb = 1, kKjcbb = 2, kDfjcbb = 3, kGemjcbb = 4, kGeojcbb = 5, kPcjcbb = 6 };
+constexpr std::uint8_t kStrategyCodeCount = 7;
 
 /// CONFIG, host -> device (acknowledged): association strategy, gates, sensor model and landmark
 /// policy. Domain checks only; the device also checks its capacities (groups, node budget).
