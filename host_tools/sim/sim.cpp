@@ -53,6 +53,7 @@ Scenario load_scenario(const std::string& path) {
     s.waypoints = points(j.at("waypoints"), "waypoints");
     if (s.waypoints.size() < 2) throw std::runtime_error("waypoints: need at least two");
     s.laps = j.value("laps", s.laps);
+    s.duration_s = j.value("duration_s", s.duration_s);
     s.speed_mps = j.value("speed_mps", s.speed_mps);
     s.max_turn_rate_radps = j.value("max_turn_rate_radps", s.max_turn_rate_radps);
     s.turn_gain = j.value("turn_gain", s.turn_gain);
@@ -81,7 +82,7 @@ Scenario load_scenario(const std::string& path) {
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
   }
-  if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
+  if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.duration_s >= 0) || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
       !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) ||
       s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0 ||
       !s.kidnap_move.allFinite() || !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0)) {
@@ -97,6 +98,7 @@ Simulator::Simulator(const Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) 
 
 bool Simulator::step(SimStep& out) {
   if (lap_ >= s_.laps) return false;
+  if (s_.duration_s > 0 && static_cast<double>(k_) * s_.dt_s >= s_.duration_s) return false;
   std::normal_distribution<double> g(0, 1);
   std::uniform_real_distribution<double> u(0, 1);
   // Steer toward the current waypoint.

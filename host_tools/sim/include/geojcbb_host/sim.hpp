@@ -21,6 +21,9 @@ struct Scenario {
   std::vector<Eigen::Vector2d> landmarks;  ///< true positions [m]
   std::vector<Eigen::Vector2d> waypoints;  ///< closed path, driven in order [m]
   int laps = 1;
+  /// The path ends after this long even if its laps are not done [s] (0: no limit). The dense scene
+  /// uses it: its map outgrows the host's capacity over a whole lap.
+  double duration_s = 0;
   double speed_mps = 3.0;           ///< commanded forward speed
   double max_turn_rate_radps = 0.5; ///< steering saturation
   double turn_gain = 2.0;           ///< w = gain * heading error (saturated)
