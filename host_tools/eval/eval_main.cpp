@@ -359,9 +359,17 @@ int run_replay(const ReplayOptions& o) {
   std::printf("== %s: %zu odom, %zu meas, %zu truth, %zu landmark lines; %d scans (%d with a true pose), %d predictions\n",
               o.log.c_str(), log.odometry.size(), log.measurements.size(), log.truth.size(), log.landmarks.size(), scans,
               with_truth, predictions);
-  std::printf("noise where a line gives none (from %s): sigma_range %.4g m, sigma_bearing %.4g rad, sigma_v %.4g m/s, "
-              "sigma_w %.4g rad/s (1-s means)\n",
-              noise_from.c_str(), noise.sigma_range_m, noise.sigma_bearing_rad, noise.sigma_v_mps, noise.sigma_w_radps);
+  {
+    auto g = [](double v, const char* unit) {
+      char b[48] = "not given";
+      if (v > 0) std::snprintf(b, sizeof b, "%.4g %s", v, unit);
+      return std::string(b);
+    };
+    std::printf("noise where a line gives none (from %s): sigma_range %s, sigma_bearing %s, sigma_v %s, sigma_w %s "
+                "(1-s means)\n",
+                noise_from.c_str(), g(noise.sigma_range_m, "m").c_str(), g(noise.sigma_bearing_rad, "rad").c_str(),
+                g(noise.sigma_v_mps, "m/s").c_str(), g(noise.sigma_w_radps, "rad/s").c_str());
+  }
   if (!labelled) std::printf("measurements not labelled: no association scores (Table 2), timing and pose only\n");
   if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
 
@@ -485,6 +493,7 @@ int run_convert(const ConvertOptions& c) {
            (m.drive ? "calibrated (latency, scale, process noise)" : "commands with constant noise") + ", calibration " +
            m.calibration + (m.drop_other_robots ? ", other robots dropped" : "");
   }
+  if (fs::path(c.out).has_parent_path()) fs::create_directories(fs::path(c.out).parent_path());
   std::ofstream f(c.out);
   if (!f) throw std::runtime_error(c.out + ": cannot write");
   replay::write_event_log(out, f,
