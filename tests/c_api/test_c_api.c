@@ -148,7 +148,8 @@ static void test_bad_inputs(void) {
   CHECK(geojcbb_associator_init(assoc_mem.bytes + 8, sizeof assoc_mem - 8, GEOJCBB_STRATEGY_JCBB, &p, &a) ==
         GEOJCBB_INVALID_INPUT);
   CHECK(geojcbb_slam_init(slam_mem.bytes, GEOJCBB_SLAM_STORAGE_SIZE - 1, &sl) == GEOJCBB_INVALID_INPUT);
-  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)6, &p, &a) == GEOJCBB_INVALID_INPUT);
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)(GEOJCBB_STRATEGY_PCJCBB + 1), &p, &a) ==
+        GEOJCBB_INVALID_INPUT);
   /* GEOJCBB needs r + d > 0 */
   CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, GEOJCBB_STRATEGY_GEOJCBB, &p, &a) ==
         GEOJCBB_INVALID_INPUT);

@@ -290,10 +290,12 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     c = ok;
     c.groups = 0;  // 0: chosen by BIC
     rejects(c, Error::kOk);
-    // Wire-only values: strategy 6 and condition_groups 2.
+    // Wire-only values: strategy 7 (one past PCJCBB) and condition_groups 2.
     Bytes pl = payload_of(ok);
     Config out = ok;
-    pl[0] = 6;
+    pl[0] = 6;  // PCJCBB
+    CHECK(out.decode(pl.data(), pl.size()) == Error::kOk);
+    pl[0] = 7;
     CHECK(out.decode(pl.data(), pl.size()) == Error::kOutOfRange);
     pl = payload_of(ok);
     pl[14] = 2;  // condition_groups (offset from the schema: 1 + 4 + 4 + 4 + 1)

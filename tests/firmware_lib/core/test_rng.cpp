@@ -15,7 +15,7 @@ TEST_CASE("PCG32 matches the reference sequence (pcg32_srandom_r(42, 54))") {
   for (const std::uint32_t e : expected) CHECK(rng.next() == e);
 }
 
-TEST_CASE("PCG32: below(n) stays in [0, n) and reaches both ends") {
+TEST_CASE("PCG32: below(n) stays within 0 .. n-1 and reaches both ends") {
   Pcg32 rng(7u);
   for (const std::uint32_t n : {1u, 2u, 3u, 24u, 1000u}) {
     bool low = false, high = false;
