@@ -349,6 +349,27 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         "feature's landmark is in the observed "
         "landmark's group)\n");
     print_accuracy(group_rows, stdout);
+    {
+      // The path and map figure (report.hpp, as the simulation's and the own-log replay's): one
+      // panel per robot, for GEOJCBB (else the first strategy listed).
+      std::size_t shown = 0;
+      for (std::size_t s = 0; s < o.strategies.size(); ++s)
+        if (!o.strategies[s].oracle && !o.strategies[s].verify && o.strategies[s].strategy == Strategy::kGeojcbb) shown = s;
+      std::vector<Eigen::Vector2d> truth_map;
+      for (const mrclam::Landmark& l : dd.ds.landmarks) truth_map.emplace_back(l.x, l.y);
+      svg::Figure path;
+      path.title = "Path and map, MRCLAM_Dataset" + std::to_string(dd.number) + ", " + o.strategies[shown].name();
+      path.cols = std::min<int>(3, static_cast<int>(dd.logs.size()));
+      for (std::size_t r = 0; r < dd.logs.size(); ++r) {
+        const Job& jb = *std::find_if(jobs.begin(), jobs.end(),
+                                      [&](const Job& x) { return x.d == d && x.r == r && x.s == shown; });
+        if (jb.error.empty())
+          path.panels.push_back(path_map_panel("robot " + std::to_string(dd.logs[r].robot), jb.res, truth_map));
+      }
+      const std::string fig = out_dir + "/mrclam" + std::to_string(dd.number) + "_path.svg";
+      svg::write(path, fig);
+      std::printf("figure: %s\n", fig.c_str());
+    }
     js["datasets"].push_back({{"dataset", dd.number},
                               {"sigma_range_m", dd.noise.sigma_range_m},
                               {"sigma_bearing_rad", dd.noise.sigma_bearing_rad},
