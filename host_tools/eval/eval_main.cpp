@@ -400,7 +400,7 @@ int run_replay(const ReplayOptions& o) {
   }
   print_tables(rows, stdout, labelled);
   if (labelled) {
-    print_summary(rows, group_rows, stdout);
+    print_summary(rows, group_rows, stdout, "run");
     if (o.group_radius_m > 0) {
       std::printf("Table 2 at landmark-group level (landmarks within %.2f m form a group)\n", o.group_radius_m);
       print_accuracy(group_rows, stdout);

@@ -168,11 +168,12 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
   return o.str();
 }
 
-void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportRow>& group_rows, std::FILE* f) {
+void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportRow>& group_rows, std::FILE* f,
+                   const char* per) {
   std::fprintf(f,
-               "Summary per strategy (landmarks, duplicates and spurious: in the final map, mean per robot; FP of "
+               "Summary per strategy (landmarks, duplicates and spurious: in the final map, mean per %s; FP of "
                "clutter: other robots or false detections paired)\n  %-9s %7s %9s %7s %10s %10s %9s %13s %8s %9s\n",
-               "strategy", "F1", "precision", "recall", "landmarks", "duplicates", "spurious", "FP of clutter",
+               per, "strategy", "F1", "precision", "recall", "landmarks", "duplicates", "spurious", "FP of clutter",
                "ANEES", "group F1");
   for (std::size_t s = 0; s < rows.size(); ++s) {
     const ReportRow& w = rows[s];

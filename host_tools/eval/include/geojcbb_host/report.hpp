@@ -50,8 +50,9 @@ const std::vector<std::string>& run_csv_columns();
 std::string run_csv(const RunResult& r, double run_s, const std::vector<std::string>& columns, double kidnap_t_s = 0);
 
 /// Per strategy: F1, precision, recall, landmarks, duplicates, spurious, FP of clutter, ANEES and
-/// group F1 (rows and group_rows in the same order).
-void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportRow>& group_rows, std::FILE* f);
+/// group F1 (rows and group_rows in the same order); `per` names what the means are over ("robot").
+void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportRow>& group_rows, std::FILE* f,
+                   const char* per = "robot");
 
 /// One panel of the path figure: the true path (where known), the estimated path, the true
 /// landmarks, and the final map's landmarks (made from a landmark, or spurious).
