@@ -7,6 +7,8 @@
 //           fitting, x/y error over time, F1 per strategy, NEES over time).
 //   mrclam  the same filter and metrics on the UTIAS MRCLAM real data (every
 //   strategy, every robot).
+//   replay  the same on a user's own log (docs/replay.md); convert-mrclam writes a MRCLAM robot as
+//           such a log. All three report through report.hpp (tables, CSV, JSON, path figure).
 // With --port (or --device, which starts a device program on a pty) every run is streamed to a
 // device over the serial link instead of running in process (host_tools/link: stream_run, one run
 // at a time, reconnecting as LinkSession does), and the device's replies are scored the same way.
@@ -35,6 +37,8 @@
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
+#include "geojcbb_host/report.hpp"
+#include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/slam_run.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/svg_plot.hpp"
@@ -45,19 +49,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Per (scenario, strategy): sums over the runs.
-struct Cell {
-  Score score;
-  int runs = 0, scans = 0, observations = 0, budget_hits = 0, landmarks = 0, spurious_in_map = 0;
-  int removed_true = 0, failed = 0;
-  double assoc_s = 0, run_s = 0, abs_x = 0, abs_y = 0;
-  std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
-  std::vector<double> scan_ms;                      ///< every scan's association time [ms]
-  int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
-  RunResult first;                                  ///< the first seed's run, for the path figure
-  bool have_first = false;
-  std::string error;
-};
+// Per (scenario, strategy): sums over the runs (report.hpp, the reporting path shared with the
+// MRCLAM replay and the own-log replay).
+using Cell = RunAggregate;
+
+// runs.csv's columns after scenario, strategy, seed (report.hpp: run_csv).
+const std::vector<std::string> kSimCsvColumns{
+    "scans",        "observations", "tp",        "tn",          "fp",          "fn",
+    "f1",           "association_s", "run_s",    "mean_abs_x_m", "mean_abs_y_m", "landmarks",
+    "spurious_in_map", "budget_hits", "relocalised_at_scan", "anees"};
 
 struct SimOptions {
   std::vector<std::string> scenarios;
@@ -136,40 +136,6 @@ std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool
   return out;
 }
 
-void add_run(Cell& c, const RunResult& r, double run_s, double kidnap_t_s) {
-  c.score.add(r.score);
-  for (const StepRecord& k : r.steps) c.scan_ms.push_back(1e3 * k.assoc_s);
-  if (kidnap_t_s > 0) {
-    const int at = relocalised_at(r, kidnap_t_s);
-    ++c.reloc_runs;
-    c.reloc_found3 += at >= 1 && at <= 3;
-  }
-  ++c.runs;
-  c.scans += r.scans;
-  c.observations += r.observations;
-  c.budget_hits += r.budget_hits;
-  c.landmarks += r.landmarks;
-  c.spurious_in_map += r.spurious_in_map;
-  c.removed_true += r.removed_true_landmarks;
-  c.assoc_s += r.association_s;
-  c.run_s += run_s;
-  c.abs_x += r.mean_abs_x_m;
-  c.abs_y += r.mean_abs_y_m;
-  if (c.nees_sum.size() < r.steps.size()) {
-    c.nees_sum.resize(r.steps.size(), 0.0);
-    c.ex_sum.resize(r.steps.size(), 0.0);
-    c.ey_sum.resize(r.steps.size(), 0.0);
-    c.t.resize(r.steps.size(), 0.0);
-  }
-  for (std::size_t k = 0; k < r.steps.size(); ++k) {
-    const StepRecord& s = r.steps[k];
-    c.nees_sum[k] += s.pose_nees;
-    c.ex_sum[k] += std::abs(s.estimate.x - s.truth.x);
-    c.ey_sum[k] += std::abs(s.estimate.y - s.truth.y);
-    c.t[k] = s.t_s;
-  }
-}
-
 int run_sim(const SimOptions& o) {
   const std::vector<Method> strategies = parse_strategies(o.strategies, o.oracle);
   std::vector<Scenario> scenarios;
@@ -212,20 +178,12 @@ int run_sim(const SimOptions& o) {
     std::lock_guard<std::mutex> lock(mu);
     Cell& c = cells[jb.sc][jb.st];
     if (!err.empty()) {
-      ++c.failed;
-      c.error = err;
+      c.fail(err);
     } else {
-      add_run(c, r, run_s, scenarios[jb.sc].kidnap_t_s);
-      std::ostringstream row;
-      row << csv_escape(scenarios[jb.sc].name) << ',' << strategies[jb.st].name() << ',' << seed << ',' << r.scans
-          << ',' << r.observations << ',' << r.score.tp << ',' << r.score.tn << ',' << r.score.fp << ',' << r.score.fn
-          << ',' << r.score.f1() << ',' << r.association_s << ',' << run_s << ',' << r.mean_abs_x_m << ','
-          << r.mean_abs_y_m << ',' << r.landmarks << ',' << r.spurious_in_map << ',' << r.budget_hits << ','
-          << (scenarios[jb.sc].kidnap_t_s > 0 ? relocalised_at(r, scenarios[jb.sc].kidnap_t_s) : -1);
-      double nees = 0;
-      for (const StepRecord& k : r.steps) nees += k.pose_nees;
-      row << ',' << (r.steps.empty() ? 0.0 : nees / static_cast<double>(r.steps.size()));
-      csv_rows[j] = row.str();
+      const double kidnap = scenarios[jb.sc].kidnap_t_s;
+      c.add(r, run_s, kidnap);
+      csv_rows[j] = csv_escape(scenarios[jb.sc].name) + ',' + strategies[jb.st].name() + ',' + std::to_string(seed) +
+                    ',' + run_csv(r, run_s, kSimCsvColumns, kidnap);
       if (jb.run == 0) {
         c.first = std::move(r);
         c.have_first = true;
@@ -251,47 +209,7 @@ int run_sim(const SimOptions& o) {
     for (std::size_t st = 0; st < strategies.size(); ++st) {
       const Cell& c = cells[sc][st];
       failures += c.failed;
-      ReportRow row;
-      row.name = strategies[st].name();
-      row.runs = c.runs;
-      row.failed = c.failed;
-      row.error = c.error;
-      row.score = c.score;
-      row.scans = c.scans;
-      row.assoc_s = c.assoc_s;
-      row.run_s = c.run_s;
-      row.budget_hits = c.budget_hits;
-      if (!c.scan_ms.empty()) {
-        std::vector<double> ms = c.scan_ms;
-        std::sort(ms.begin(), ms.end());
-        row.ms_median = ms[ms.size() / 2];
-        row.ms_p90 = ms[std::min(ms.size() - 1, ms.size() * 9 / 10)];
-        row.ms_max = ms.back();
-      }
-      row.reloc_runs = c.reloc_runs;
-      row.reloc_found3 = c.reloc_found3;
-      row.abs_x = c.runs ? c.abs_x / c.runs : NAN;
-      row.abs_y = c.runs ? c.abs_y / c.runs : NAN;
-      row.landmarks = c.runs ? double(c.landmarks) / c.runs : NAN;
-      row.spurious_in_map = c.runs && !o.runner ? double(c.spurious_in_map) / c.runs : NAN;
-      // NEES: the mean over runs at each scan against its 95 % bounds for 3 x
-      // runs dof, and the average over the run.
-      if (c.runs > 0 && !c.nees_sum.empty()) {
-        double sum = 0;
-        int inside = 0;
-        double l = 0, h = 0;
-        const bool b = chi2_inv(0.025, 3 * c.runs, l) == Status::kOk && chi2_inv(0.975, 3 * c.runs, h) == Status::kOk;
-        for (double v : c.nees_sum) {
-          const double m = v / c.runs;
-          sum += m;
-          inside += b && m >= l / c.runs && m <= h / c.runs;
-        }
-        row.anees = sum / c.nees_sum.size();
-        row.nees_inside = double(inside) / c.nees_sum.size();
-        const long dof = 3L * c.runs * static_cast<long>(c.nees_sum.size());
-        row.anees_lo = chi2_quantile_wh(0.025, dof) / (double(c.runs) * c.nees_sum.size());
-        row.anees_hi = chi2_quantile_wh(0.975, dof) / (double(c.runs) * c.nees_sum.size());
-      }
+      const ReportRow row = c.row(strategies[st].name(), true, !o.runner);
       f1[st][sc] = c.score.f1();
       rows.push_back(row);
     }
@@ -322,31 +240,8 @@ int run_sim(const SimOptions& o) {
       for (std::size_t st = 0; st < strategies.size(); ++st) {
         const Cell& c = cells[sc][st];
         if (!c.have_first) continue;
-        svg::Panel p;
-        p.title = strategies[st].name();
-        p.xlabel = "x [m]";
-        p.ylabel = "y [m]";
-        p.equal_aspect = true;
-        svg::Series truth{"true path", {}, {}, svg::Style::kLine, "#000000"};
-        svg::Series est{"estimated path", {}, {}, svg::Style::kDashed, "#D55E00"};
-        for (const StepRecord& r : c.first.steps) {
-          truth.x.push_back(r.truth.x);
-          truth.y.push_back(r.truth.y);
-          est.x.push_back(r.estimate.x);
-          est.y.push_back(r.estimate.y);
-        }
-        svg::Series tl{"true landmarks", {}, {}, svg::Style::kMarkersCross, "#0072B2"};
-        for (const auto& l : s.landmarks) {
-          tl.x.push_back(l.x());
-          tl.y.push_back(l.y());
-        }
-        svg::Series el{"estimated landmarks", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
-        svg::Series sl{"spurious landmarks", {}, {}, svg::Style::kMarkersDot, "#CC79A7"};
-        for (const MapLandmark& m : c.first.map) {
-          (m.truth >= 0 ? el : sl).x.push_back(m.x);
-          (m.truth >= 0 ? el : sl).y.push_back(m.y);
-        }
-        p.series = {tl, truth, est, el, sl};
+        std::vector<Eigen::Vector2d> truth_map(s.landmarks.begin(), s.landmarks.end());
+        const svg::Panel p = path_map_panel(strategies[st].name(), c.first, truth_map);
         path.panels.push_back(p);
         const std::string name = strategies[st].name();
         svg::Series sx{name, c.t, {}, svg::Style::kLine, ""}, sy{name, c.t, {}, svg::Style::kLine, ""};
@@ -393,9 +288,9 @@ int run_sim(const SimOptions& o) {
   }
   {
     std::ofstream csv(o.out_dir + "/runs.csv");
-    csv << "scenario,strategy,seed,scans,observations,tp,tn,fp,fn,f1,"
-           "association_s,run_s,mean_abs_x_m,mean_abs_y_m,"
-           "landmarks,spurious_in_map,budget_hits,relocalised_at_scan,anees\n";
+    csv << "scenario,strategy,seed";
+    for (const std::string& col : kSimCsvColumns) csv << ',' << col;
+    csv << '\n';
     for (const std::string& r : csv_rows)
       if (!r.empty()) csv << r << '\n';
     std::ofstream(o.out_dir + "/summary.json") << js.dump(2) << '\n';
@@ -407,6 +302,210 @@ int run_sim(const SimOptions& o) {
       jobs.size(), wall_s, threads, o.out_dir.c_str(), o.out_dir.c_str());
   if (failures > 0) std::fprintf(stderr, "%d runs failed (see the tables)\n", failures);
   return failures > 0 ? 1 : 0;
+}
+
+// The own-log replay (docs/replay.md): every chosen strategy on one log, reported as the
+// simulation and the MRCLAM replay are (report.hpp): Tables 1 and 2 (Table 2 and the summary only
+// when every measurement is labelled), pose and map, replay.csv, replay.json, replay_path.svg.
+struct ReplayOptions {
+  std::string log;
+  std::vector<std::string> strategies;
+  bool oracle = false;
+  std::string out_dir = "build/results/replay";
+  replay::LogNoise noise;            ///< 0: from the lines, or from the data
+  bool noise_from_data = false;
+  double noise_inflation = 1.5;
+  double group_radius_m = 0;         ///< > 0: landmark groups for the group-level score
+  bool known_map = false;
+  bool svg = true;
+  bool progress = true;
+  int jobs = 0;
+  RunOptions run;
+};
+
+int run_replay(const ReplayOptions& o) {
+  const replay::EventLog log = replay::read_event_log(o.log);
+  const bool labelled = log.labelled();
+  if (o.oracle && !labelled) throw std::runtime_error("TRUTH (--truth) needs every measurement labelled");
+  replay::LogNoise noise;
+  std::string noise_from = "the command line and the log's lines";
+  if (o.noise_from_data) {
+    noise = replay::estimate_noise(log, o.noise_inflation);
+    noise_from = "the labelled data (robust spreads x " + std::to_string(o.noise_inflation).substr(0, 4) + ")";
+  }
+  if (o.noise.sigma_range_m > 0) noise.sigma_range_m = o.noise.sigma_range_m;
+  if (o.noise.sigma_bearing_rad > 0) noise.sigma_bearing_rad = o.noise.sigma_bearing_rad;
+  if (o.noise.sigma_v_mps > 0) noise.sigma_v_mps = o.noise.sigma_v_mps;
+  if (o.noise.sigma_w_radps > 0) noise.sigma_w_radps = o.noise.sigma_w_radps;
+  const replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
+  const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
+  RunOptions base = o.run;
+  if (o.group_radius_m > 0) {
+    if (positions.empty()) throw std::runtime_error("--group-radius needs the landmark positions (landmark lines)");
+    base.landmark_group = replay::landmark_groups(positions, o.group_radius_m);
+  }
+  if (o.known_map) {
+    if (positions.empty()) throw std::runtime_error("--known-map needs the landmark positions (landmark lines)");
+    base.known_map = positions;
+  }
+  const std::vector<Method> strategies = parse_strategies(o.strategies, o.oracle);
+  fs::create_directories(o.out_dir);
+  int scans = 0, predictions = 0, with_truth = 0;
+  for (const RunInput& in : source.inputs()) {
+    scans += in.scan;
+    predictions += !in.scan;
+    with_truth += in.scan && in.have_truth;
+  }
+  std::printf("== %s: %zu odom, %zu meas, %zu truth, %zu landmark lines; %d scans (%d with a true pose), %d predictions\n",
+              o.log.c_str(), log.odometry.size(), log.measurements.size(), log.truth.size(), log.landmarks.size(), scans,
+              with_truth, predictions);
+  {
+    auto g = [](double v, const char* unit) {
+      char b[48] = "not given";
+      if (v > 0) std::snprintf(b, sizeof b, "%.4g %s", v, unit);
+      return std::string(b);
+    };
+    std::printf("noise where a line gives none (from %s): sigma_range %s, sigma_bearing %s, sigma_v %s, sigma_w %s "
+                "(1-s means)\n",
+                noise_from.c_str(), g(noise.sigma_range_m, "m").c_str(), g(noise.sigma_bearing_rad, "rad").c_str(),
+                g(noise.sigma_v_mps, "m/s").c_str(), g(noise.sigma_w_radps, "rad/s").c_str());
+  }
+  if (!labelled) std::printf("measurements not labelled: no association scores (Table 2), timing and pose only\n");
+  if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
+
+  std::vector<RunAggregate> agg(strategies.size());
+  const double wall_s = run_parallel(strategies.size(), o.jobs, o.progress, [&](std::size_t k) {
+    RunOptions ro = base;
+    strategies[k].apply(ro);
+    replay::LogSource src = source;  // each thread its own position
+    src.rewind();
+    const auto a = std::chrono::steady_clock::now();
+    try {
+      RunResult r = run_inputs(src, ro);
+      agg[k].add(r, std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+      agg[k].first = std::move(r);
+      agg[k].have_first = true;
+    } catch (const std::exception& e) {
+      agg[k].fail(e.what());
+    }
+  });
+  std::vector<ReportRow> rows, group_rows;
+  int failures = 0;
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    ReportRow row = agg[k].row(strategies[k].name(), false, labelled);
+    if (with_truth == 0) row.abs_x = row.abs_y = row.anees = NAN;
+    rows.push_back(row);
+    group_rows.push_back(agg[k].group_row(strategies[k].name()));
+    failures += agg[k].failed;
+  }
+  print_tables(rows, stdout, labelled);
+  if (labelled) {
+    print_summary(rows, group_rows, stdout, "run");
+    if (o.group_radius_m > 0) {
+      std::printf("Table 2 at landmark-group level (landmarks within %.2f m form a group)\n", o.group_radius_m);
+      print_accuracy(group_rows, stdout);
+    }
+  }
+  // Files: one CSV row per strategy, the summary, the path and map figure.
+  {
+    std::ofstream csv(o.out_dir + "/replay.csv");
+    csv << "log,strategy";
+    for (const std::string& c : run_csv_columns()) csv << ',' << c;
+    csv << ",error\n";
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      csv << csv_escape(o.log) << ',' << strategies[k].name() << ',';
+      if (agg[k].have_first) {
+        csv << run_csv(agg[k].first, agg[k].run_s, run_csv_columns()) << ",\n";
+      } else {
+        csv << std::string(run_csv_columns().size(), ',') << csv_escape(agg[k].error) << '\n';
+      }
+    }
+    nlohmann::json js;
+    js["log"] = o.log;
+    js["labelled"] = labelled;
+    js["scans"] = scans;
+    js["scans_with_truth"] = with_truth;
+    js["noise"] = {{"from", noise_from},
+                   {"sigma_range_m", noise.sigma_range_m},
+                   {"sigma_bearing_rad", noise.sigma_bearing_rad},
+                   {"sigma_v_mps", noise.sigma_v_mps},
+                   {"sigma_w_radps", noise.sigma_w_radps}};
+    js["wall_s"] = wall_s;
+    js["strategies"] = rows_json(rows);
+    if (o.group_radius_m > 0) js["group_level"] = rows_json(group_rows);
+    std::ofstream(o.out_dir + "/replay.json") << js.dump(2) << '\n';
+    if (!csv) throw std::runtime_error("cannot write " + o.out_dir + "/replay.csv");
+  }
+  if (o.svg) {
+    svg::Figure path;
+    path.title = "Path and map, " + fs::path(o.log).filename().string();
+    path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
+    for (std::size_t k = 0; k < strategies.size(); ++k)
+      if (agg[k].have_first) path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
+    svg::write(path, o.out_dir + "/replay_path.svg");
+  }
+  std::printf("\n%zu replays in %.1f s; per-strategy rows: %s/replay.csv, summary: %s/replay.json%s\n",
+              strategies.size(), wall_s, o.out_dir.c_str(), o.out_dir.c_str(),
+              o.svg ? (", figure: " + o.out_dir + "/replay_path.svg").c_str() : "");
+  if (failures > 0) std::fprintf(stderr, "%d replays failed (see the tables)\n", failures);
+  return failures > 0 ? 1 : 0;
+}
+
+// A MRCLAM robot as a log (docs/replay.md): with its model (what MrclamSource feeds the filter,
+// as `geojcbb_eval mrclam --datasets D --robots R` builds it) or raw.
+struct ConvertOptions {
+  std::string data_dir, out;
+  int dataset = 6, robot = 1;
+  double seconds = 0;  ///< > 0: only the first seconds
+  bool raw = false;
+  MrclamOptions model;  ///< the model switches, as for `mrclam`
+};
+
+int run_convert(const ConvertOptions& c) {
+  const std::string root = c.data_dir.empty() ? mrclam::default_data_dir() : c.data_dir;
+  const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(c.dataset, root));
+  const mrclam::RobotLog full = mrclam::load_robot(ds, c.robot);
+  const mrclam::RobotLog log = c.seconds > 0 ? replay::truncate(full, c.seconds) : full;
+  replay::EventLog out;
+  std::string what;
+  if (c.raw) {
+    out = replay::mrclam_raw_log(ds, log);
+    what = "raw: commands and measurements as logged, no noise";
+  } else {
+    const MrclamOptions& m = c.model;
+    MrclamNoise noise = MrclamNoise::from_data(ds, {full}, m.noise_inflation);
+    if (m.sigma_range_m > 0) noise.sigma_range_m = m.sigma_range_m;
+    if (m.sigma_bearing_rad > 0) noise.sigma_bearing_rad = m.sigma_bearing_rad;
+    if (m.sigma_v_mps > 0) noise.sigma_v_mps = m.sigma_v_mps;
+    if (m.sigma_w_radps > 0) noise.sigma_w_radps = m.sigma_w_radps;
+    mrclam::RobotCalibration cal;
+    if (m.camera || m.drive) {
+      if (m.calibration == "same") {
+        cal = mrclam::calibrate_robot(ds, full, m.calibration_options);
+      } else {
+        const mrclam::Dataset cds = mrclam::load_dataset(mrclam::dataset_dir(c.dataset == 6 ? 7 : 6, root));
+        cal = mrclam::calibrate_robot(cds, mrclam::load_robot(cds, c.robot), m.calibration_options);
+      }
+    }
+    out = replay::mrclam_to_log(ds, log, mrclam_model(noise, cal, m.camera, m.drive, m.model_inflation),
+                                m.drop_other_robots);
+    what = std::string("the replay's model: camera ") + (m.camera ? "calibrated" : "constant R") + ", drive " +
+           (m.drive ? "calibrated (latency, scale, process noise)" : "commands with constant noise") + ", calibration " +
+           m.calibration + (m.drop_other_robots ? ", other robots dropped" : "");
+  }
+  if (fs::path(c.out).has_parent_path()) fs::create_directories(fs::path(c.out).parent_path());
+  std::ofstream f(c.out);
+  if (!f) throw std::runtime_error(c.out + ": cannot write");
+  replay::write_event_log(out, f,
+                          "MRCLAM_Dataset" + std::to_string(c.dataset) + " robot " + std::to_string(c.robot) +
+                              (c.seconds > 0 ? ", first " + std::to_string(c.seconds) + " s" : std::string()) + "\n" +
+                              what);
+  f.close();
+  if (!f) throw std::runtime_error(c.out + ": cannot write");
+  std::printf("%s: %zu odom, %zu meas, %zu empty scans, %zu truth, %zu landmark lines (%s)\n", c.out.c_str(),
+              out.odometry.size(), out.measurements.size(), out.empty_scans.size(), out.truth.size(),
+              out.landmarks.size(), what.c_str());
+  return 0;
 }
 
 // Runs `run` in process (no --port/--device), or with every run streamed to the device: prints the
@@ -465,7 +564,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "geojcbb evaluation: EKF-SLAM with every association strategy, scored "
       "against ground truth, "
-      "on simulated scenarios (sim) or the UTIAS MRCLAM real data (mrclam)."};
+      "on simulated scenarios (sim), the UTIAS MRCLAM real data (mrclam) or your own log (replay; convert-mrclam "
+      "writes a MRCLAM robot as such a log)."};
   app.require_subcommand(1);
   SimOptions so;
   auto* sim = app.add_subcommand("sim",
@@ -602,8 +702,88 @@ int main(int argc, char** argv) {
                    "stream every replay to the device on this serial port or pty instead of running it in process",
                    "start this device program with --pty (e.g. geojcbb_device) and stream every replay to it");
 
+  ReplayOptions ro;
+  auto* rp = app.add_subcommand("replay",
+                                "replay your own log (docs/replay.md): every strategy, scored when the measurements "
+                                "are labelled; tables, replay.csv, replay.json and the path/map figure");
+  rp->add_option("--log", ro.log, "the log file (CSV, docs/replay.md)")->required();
+  rp->add_option("--strategies", ro.strategies, "strategies, comma separated (default all)")->delimiter(',');
+  rp->add_flag("--truth", ro.oracle, "add a row TRUTH: association by the labels (needs labelled measurements)");
+  rp->add_option("--out-dir", ro.out_dir, "directory for replay.csv, replay.json and replay_path.svg")
+      ->default_val(ro.out_dir);
+  rp->add_option("--sigma-range", ro.noise.sigma_range_m, "range std for R where a line gives none [m]");
+  rp->add_option("--sigma-bearing", ro.noise.sigma_bearing_rad, "bearing std for R where a line gives none [rad]");
+  rp->add_option("--sigma-v", ro.noise.sigma_v_mps,
+                 "odometry v noise where a line gives none: std of a 1-second mean [m/s]");
+  rp->add_option("--sigma-w", ro.noise.sigma_w_radps,
+                 "odometry w noise where a line gives none: std of a 1-second mean [rad/s]");
+  rp->add_flag("--noise-from-data", ro.noise_from_data,
+               "estimate the noise from the labelled measurements, truth and landmark lines (robust spreads; a "
+               "--sigma-* given overrides its part)");
+  rp->add_option("--noise-inflation", ro.noise_inflation, "factor on the data's robust spreads")
+      ->default_val(ro.noise_inflation)
+      ->check(CLI::Range(0.1, 100.0));
+  rp->add_option("--group-radius", ro.group_radius_m,
+                 "landmarks within this distance [m] form a group, for a group-level score (0: none)")
+      ->default_val(0.0)
+      ->check(CLI::Range(0.0, 1000.0));
+  rp->add_flag("--known-map", ro.known_map, "localisation only: the landmark lines are the map (std 1 cm, fixed)");
+  bool rp_mrclam_rules = false;
+  rp->add_flag("--mrclam-rules", rp_mrclam_rules,
+               "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "
+               "0.03 rad) where not given");
+  rp->add_option("--confidence", ro.run.confidence, "chi-square level of the individual and joint gates")
+      ->default_val(0.99)
+      ->check(CLI::Range(0.5, 0.999999));
+  rp->add_option("--new-landmark-gate", ro.run.new_landmark_gate, "chi-square level of the augmentation gate")
+      ->default_val(0.999)
+      ->check(CLI::Range(0.5, 0.999999));
+  rp->add_option("--compensation", ro.run.compensation_m, "d in the local region r + d [m]")
+      ->default_val(5.0)
+      ->check(CLI::Range(0.0, 1000.0));
+  rp->add_option("--jobs", ro.jobs, "worker threads (default: the number of cores)")->check(CLI::Range(0, 256));
+  rp->add_flag("!--no-svg", ro.svg, "do not write the figure");
+  rp->add_flag("!--no-progress", ro.progress, "no progress bar on stderr");
+  add_robustness_options(*rp, ro.run);
+
+  ConvertOptions co;
+  auto* cv = app.add_subcommand("convert-mrclam",
+                                "write a MRCLAM robot as a log of docs/replay.md's format: with the replay's model "
+                                "(replays to the same results as `mrclam --datasets D --robots R`) or --raw");
+  cv->add_option("--data", co.data_dir, "folder holding MRCLAM_Dataset6 and 7 (default as for mrclam)");
+  cv->add_option("--dataset", co.dataset, "dataset number")->default_val(6)->check(CLI::IsMember({6, 7}));
+  cv->add_option("--robot", co.robot, "robot number")->default_val(1)->check(CLI::Range(1, 5));
+  cv->add_option("--out", co.out, "the log file to write")->required();
+  cv->add_option("--seconds", co.seconds, "only the first seconds of the robot's log (0: all)")
+      ->default_val(0.0)
+      ->check(CLI::Range(0.0, 1e6));
+  cv->add_flag("--raw", co.raw,
+               "the data as logged (commands, measurements, labels, truth, landmarks), no model or noise: replay "
+               "it with --noise-from-data or --sigma-*");
+  cv->add_option("--noise-inflation", co.model.noise_inflation, "as for mrclam")->default_val(co.model.noise_inflation);
+  cv->add_flag("!--no-camera", co.model.camera, "as for mrclam");
+  cv->add_flag("!--no-drive", co.model.drive, "as for mrclam");
+  cv->add_option("--calibration", co.model.calibration, "as for mrclam: cross or same")
+      ->default_val(co.model.calibration)
+      ->check(CLI::IsMember({"cross", "same"}));
+  cv->add_option("--model-inflation", co.model.model_inflation, "as for mrclam")->default_val(co.model.model_inflation);
+  cv->add_flag("--drop-other-robots", co.model.drop_other_robots, "as for mrclam");
+
   CLI11_PARSE(app, argc, argv);
   try {
+    if (rp->parsed()) {
+      if (rp_mrclam_rules) {
+        const RunOptions m = mrclam_run_defaults();
+        if (rp->count("--miss-probability") == 0) ro.run.landmark_policy.miss_probability = m.landmark_policy.miss_probability;
+        if (rp->count("--static-gate-level") == 0) ro.run.static_gate_level = m.static_gate_level;
+        if (rp->count("--new-if-taken") == 0)
+          ro.run.new_if_candidates_taken = m.new_if_candidates_taken;
+        if (rp->count("--occlusion") == 0) ro.run.occlusion_rad = m.occlusion_rad;
+      }
+      ro.progress = ro.progress && isatty(STDERR_FILENO);
+      return run_replay(ro);
+    }
+    if (cv->parsed()) return run_convert(co);
     if (sim->parsed()) {
       if (so.scenarios.empty()) {
         so.scenarios = {std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json",

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/report.hpp"
 
 namespace geojcbb::host {
 
@@ -57,6 +58,7 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
     const int s = ds.landmarks[k].subject;
     if (s >= 0 && s < static_cast<int>(index_of_subject.size())) index_of_subject[s] = static_cast<int>(k);
   }
+  double t = o[i].t + lag;  // the filter's time: every prediction starts here
   auto push_motion = [&](double v, double w, double dt, double extra_v_std, double extra_w_std) {
     RunInput in;
     if (model.drive) {
@@ -74,9 +76,9 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
       in.sigma_w_radps = noise.sigma_w_radps * k;
     }
     in.dt_s = dt;
+    in.t_s = t;  // the piece's start (the log converter writes it as the odom line's time)
     inputs_.push_back(std::move(in));
   };
-  double t = o[i].t + lag;
   auto advance = [&](double to) {  // predict from t to `to` with the command of sample i
     while (t < to) {               // the hold limit splits a gap into a moving and a stopped part
       const double start = o[i].t + lag;
@@ -176,6 +178,12 @@ std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
 }
 
 namespace {
+// mrclam.csv's columns between dataset, robot, strategy and error (report.hpp: run_csv).
+const std::vector<std::string> kMrclamCsvColumns{"scans",        "observations",  "tp",    "tn",
+                                                 "fp",           "fn",            "precision", "recall",
+                                                 "f1",           "association_s", "run_s", "mean_abs_x_m",
+                                                 "mean_abs_y_m", "landmarks",     "spurious_in_map"};
+
 void write_trace(const std::string& path, const RunResult& res) {
   {
     std::ofstream m(path.substr(0, path.size() - 4) + "_map.csv");
@@ -271,9 +279,9 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   nlohmann::json js;
   int failures = 0;
   std::ofstream csv(out_dir + "/mrclam.csv");
-  csv << "dataset,robot,strategy,scans,observations,tp,tn,fp,fn,precision,"
-         "recall,f1,association_s,run_s,"
-         "mean_abs_x_m,mean_abs_y_m,landmarks,spurious_in_map,error\n";
+  csv << "dataset,robot,strategy";
+  for (const std::string& c : kMrclamCsvColumns) csv << ',' << c;
+  csv << ",error\n";
   for (std::size_t d = 0; d < data.size(); ++d) {
     const DatasetData& dd = data[d];
     std::printf(
@@ -288,9 +296,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         kLandmarkGroupRadius_m, "robot");
     for (const Method& s : o.strategies) std::printf(" %11s", s.name());
     std::printf("   winner\n");
-    std::vector<ReportRow> rows(o.strategies.size());
-    for (std::size_t s = 0; s < o.strategies.size(); ++s) rows[s].name = o.strategies[s].name();
-    std::vector<ReportRow> group_rows = rows;
+    std::vector<RunAggregate> agg(o.strategies.size());
     for (std::size_t r = 0; r < dd.logs.size(); ++r) {
       std::printf("  %-6d", dd.logs[r].robot);
       double best = -1;
@@ -298,15 +304,13 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       for (std::size_t s = 0; s < o.strategies.size(); ++s) {
         const Job& jb =
             *std::find_if(jobs.begin(), jobs.end(), [&](const Job& x) { return x.d == d && x.r == r && x.s == s; });
-        ReportRow& row = rows[s];
-        std::ostringstream line;
-        line << dd.number << ',' << dd.logs[r].robot << ',' << o.strategies[s].name() << ',';
+        const std::string line =
+            std::to_string(dd.number) + ',' + std::to_string(dd.logs[r].robot) + ',' + o.strategies[s].name() + ',';
         if (!jb.error.empty()) {
           ++failures;
-          ++row.failed;
-          row.error = jb.error;
+          agg[s].fail(jb.error);
           std::printf(" %11s", "failed");
-          csv << line.str() << ",,,,,,,,,,,,,,," << csv_escape(jb.error) << '\n';
+          csv << line << ",,,,,,,,,,,,,,," << csv_escape(jb.error) << '\n';
           continue;
         }
         const RunResult& res = jb.res;
@@ -323,67 +327,49 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         } else if (std::abs(f1 - best) <= 1e-12) {
           winner += "=" + std::string(o.strategies[s].name());
         }
-        row.score.add(res.score);
-        group_rows[s].score.add(res.group_score);
-        group_rows[s].runs += 1;
-        ++row.runs;
-        row.scans += res.scans;
-        row.assoc_s += res.association_s;
-        row.run_s += jb.run_s;
-        row.budget_hits += res.budget_hits;
-        const double w = 1.0;
-        row.abs_x = (std::isnan(row.abs_x) ? 0 : row.abs_x) + w * res.mean_abs_x_m;
-        row.abs_y = (std::isnan(row.abs_y) ? 0 : row.abs_y) + w * res.mean_abs_y_m;
-        row.landmarks = (std::isnan(row.landmarks) ? 0 : row.landmarks) + res.landmarks;
-        row.spurious_in_map = (std::isnan(row.spurious_in_map) ? 0 : row.spurious_in_map) + res.spurious_in_map;
-        row.fp_clutter += res.fp_clutter;
-        {
-          std::vector<int> per_truth(dd.ds.landmarks.size(), 0);
-          int dup = 0;
-          for (const MapLandmark& l : res.map)
-            if (l.truth >= 0 && per_truth[static_cast<std::size_t>(l.truth)]++ > 0) ++dup;
-          row.duplicates = (std::isnan(row.duplicates) ? 0 : row.duplicates) + dup;
-        }
-        double nees = 0;
-        for (const StepRecord& st : res.steps) nees += st.pose_nees;
-        row.anees = (std::isnan(row.anees) ? 0 : row.anees) + (res.steps.empty() ? 0 : nees / res.steps.size());
-        line << res.scans << ',' << res.observations << ',' << res.score.tp << ',' << res.score.tn << ','
-             << res.score.fp << ',' << res.score.fn << ',' << res.score.precision() << ',' << res.score.recall() << ','
-             << f1 << ',' << res.association_s << ',' << jb.run_s << ',' << res.mean_abs_x_m << ',' << res.mean_abs_y_m
-             << ',' << res.landmarks << ',' << res.spurious_in_map << ",";
-        csv << line.str() << '\n';
+        agg[s].add(res, jb.run_s);
+        csv << line << run_csv(res, jb.run_s, kMrclamCsvColumns) << ",\n";
       }
       std::printf("   %s\n", winner.c_str());
     }
-    for (ReportRow& row : rows) {
-      if (row.runs == 0) continue;
-      row.abs_x /= row.runs;
-      row.abs_y /= row.runs;
-      row.landmarks /= row.runs;
-      row.duplicates = o.runner ? NAN : row.duplicates / row.runs;
-      row.spurious_in_map = o.runner ? NAN : row.spurious_in_map / row.runs;  // a device does not report its map
-      row.anees /= row.runs;  // mean over robots of each run's time-averaged
-                              // NEES (no Monte Carlo bounds)
+    // The mean over robots of each replay's time-averaged NEES (no Monte Carlo bounds); a device
+    // does not report its map.
+    std::vector<ReportRow> rows, group_rows;
+    for (std::size_t s = 0; s < o.strategies.size(); ++s) {
+      rows.push_back(agg[s].row(o.strategies[s].name(), false, !o.runner));
+      group_rows.push_back(agg[s].group_row(o.strategies[s].name()));
     }
     std::printf(
         "All robots of the dataset (ANEES: mean over robots of the "
         "time-averaged pose NEES; 3 if consistent)\n");
     print_tables(rows, stdout);
-    std::printf("Summary per strategy (landmarks, duplicates and spurious: in the final map, mean per robot; FP of clutter: "
-                "other robots or false detections paired)\n  %-9s %7s %9s %7s %10s %10s %9s %13s %8s %9s\n",
-                "strategy", "F1", "precision", "recall", "landmarks", "duplicates", "spurious", "FP of clutter",
-                "ANEES", "group F1");
-    for (std::size_t s = 0; s < rows.size(); ++s) {
-      const ReportRow& w = rows[s];
-      std::printf("  %-9s %7.4f %9.4f %7.4f %10.1f %10.1f %9.1f %13d %8.2f %9.4f\n", w.name.c_str(), w.score.f1(),
-                  w.score.precision(), w.score.recall(), w.landmarks, w.duplicates, w.spurious_in_map, w.fp_clutter,
-                  w.anees, group_rows[s].score.f1());
-    }
+    print_summary(rows, group_rows, stdout);
     std::printf(
         "Table 2 at landmark-group level (a pair is correct when its "
         "feature's landmark is in the observed "
         "landmark's group)\n");
     print_accuracy(group_rows, stdout);
+    {
+      // The path and map figure (report.hpp, as the simulation's and the own-log replay's): one
+      // panel per robot, for GEOJCBB (else the first strategy listed).
+      std::size_t shown = 0;
+      for (std::size_t s = 0; s < o.strategies.size(); ++s)
+        if (!o.strategies[s].oracle && !o.strategies[s].verify && o.strategies[s].strategy == Strategy::kGeojcbb) shown = s;
+      std::vector<Eigen::Vector2d> truth_map;
+      for (const mrclam::Landmark& l : dd.ds.landmarks) truth_map.emplace_back(l.x, l.y);
+      svg::Figure path;
+      path.title = "Path and map, MRCLAM_Dataset" + std::to_string(dd.number) + ", " + o.strategies[shown].name();
+      path.cols = std::min<int>(3, static_cast<int>(dd.logs.size()));
+      for (std::size_t r = 0; r < dd.logs.size(); ++r) {
+        const Job& jb = *std::find_if(jobs.begin(), jobs.end(),
+                                      [&](const Job& x) { return x.d == d && x.r == r && x.s == shown; });
+        if (jb.error.empty())
+          path.panels.push_back(path_map_panel("robot " + std::to_string(dd.logs[r].robot), jb.res, truth_map));
+      }
+      const std::string fig = out_dir + "/mrclam" + std::to_string(dd.number) + "_path.svg";
+      svg::write(path, fig);
+      std::printf("figure: %s\n", fig.c_str());
+    }
     js["datasets"].push_back({{"dataset", dd.number},
                               {"sigma_range_m", dd.noise.sigma_range_m},
                               {"sigma_bearing_rad", dd.noise.sigma_bearing_rad},

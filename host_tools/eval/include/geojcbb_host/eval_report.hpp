@@ -92,7 +92,9 @@ inline void print_accuracy(const std::vector<ReportRow>& rows, std::FILE* f) {
   }
 }
 
-inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f) {
+/// Table 1, relocalisation (kidnap scenes), Table 2 (scores = false: not printed, for logs without
+/// labels) and the pose and map table.
+inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool scores = true) {
   std::fprintf(f, "Table 1: association time\n");
   std::fprintf(f, "  %-9s %6s %16s %16s %12s %12s %28s\n", "strategy", "runs", "per scan [ms]", "per run [s]",
                "run [s]", "budget hits", "scan [ms] median/p90/max");
@@ -116,8 +118,10 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f) {
                      100.0 * r.reloc_found3 / r.reloc_runs);
     }
   }
-  std::fprintf(f, "Table 2: association accuracy (sums over the runs)\n");
-  print_accuracy(rows, f);
+  if (scores) {
+    std::fprintf(f, "Table 2: association accuracy (sums over the runs)\n");
+    print_accuracy(rows, f);
+  }
   std::fprintf(f, "Pose and map (means over the runs)\n");
   std::fprintf(f, "  %-8s %10s %10s %10s %18s %12s %10s %10s\n", "strategy", "|x err| m", "|y err| m", "ANEES",
                "ANEES 95% bounds", "scans in b.", "landmarks", "spurious");

@@ -174,7 +174,7 @@ struct RunInput {
   bool scan = false;
   double v_mps = 0, w_radps = 0, dt_s = 0, sigma_v_mps = 0, sigma_w_radps = 0;  ///< prediction
   std::vector<SimObservation> observations;         ///< scan: (range, bearing), each with its truth and R
-  double t_s = 0;                                   ///< scan time
+  double t_s = 0;                                   ///< scan time (a prediction's start where known)
   bool have_truth = false;                          ///< true_pose is known
   Pose2<double> true_pose{};
   /// A kidnap: the filter's pose covariance re-set to pose_cov, the estimate kept (no prediction,
