@@ -43,6 +43,13 @@ Vec2<T> observe(const Pose2<T>& x_r, const Vec2<T>& l, Mat23<T>* J_z_pose = null
   return z;
 }
 
+/// Innovation z - h of a range-bearing measurement, the bearing wrapped into (-pi, pi]. Shared by
+/// the gate (individual compatibility) and the filter's update, so it lives below both.
+template <typename T>
+Vec2<T> innovation(const Vec2<T>& z, const Vec2<T>& h) {
+  return Vec2<T>(z.x() - h.x(), wrap_angle(z.y() - h.y()));
+}
+
 /// Landmark position from pose x_r and measurement z = (range, bearing): the inverse model used to
 /// initialise a new feature.
 /// @param[out] J_l_pose  2x3 Jacobian with respect to (x, y, theta); may be null

@@ -2,8 +2,11 @@
 //   state  x = [x_r, y_r, theta_r, l1x, l1y, l2x, l2y, ...]   (Layout: named blocks)
 //   predict:        x_r <- f(x_r, u),  P_rr <- F P_rr F^T + G Q G^T,  P_rl <- F P_rl          O(n)
 //   predict_local:  candidates within r + d (eq. 5), their h_j and C = H P H^T (all cross terms) O(n^2)
-//   update:         one batch update with the associated pairs: S = H P H^T + R = L L^T,
-//                   W = P H^T L^-T, x <- x + W L^-1 nu, P <- P - W W^T (then symmetrised)  O(n^2 p)
+//   update:         the associated pairs fused sequentially, kUpdateBlockPairs pairs (rows of H
+//                   touching the pose and one landmark each) at a time, linearised once: per block
+//                   A = P H_b^T (O(n)), S_b = H_b A + R_b = L L^T, V = A L^-T, x <- x + V L^-1 nu_b,
+//                   P <- P - V V^T on the packed triangle; equal to one batch update (design.md,
+//                   "Covariance engine"); scratch O(n)                                      O(n^2 p)
 //   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
 //   review:         landmark bookkeeping: a new landmark is tentative until it is paired again;
 //                   one that is expected in view and missed too often is removed              O(n^2)
@@ -15,8 +18,10 @@
 // Landmark ids are stable: augment hands out increasing ids and removal keeps the order, so the id
 // of index j only ever grows with j, and index_of() is a binary search. Predictions, associations
 // and update() speak ids; indices are internal.
-// No heap: P is a fixed array of capacity (3 + 2 MaxLandmarks)^2, used in its top-left dim x dim
-// corner. Every call validates first and changes no state unless it returns kOk.
+// No heap: P is stored packed, its upper triangle column by column (entry (r, c), r <= c, at
+// c (c + 1) / 2 + r), in a fixed array of capacity K (K + 1) / 2 for K = 3 + 2 MaxLandmarks; only
+// cov() reads it from outside. Adding a landmark appends two columns and moves nothing. Every call
+// validates first and changes no state unless it returns kOk.
 #pragma once
 
 #include <array>
@@ -24,7 +29,7 @@
 
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/ekf/motion.hpp"
-#include "geojcbb/gate/compatibility.hpp"
+#include "geojcbb/core/range_bearing.hpp"
 
 namespace geojcbb::ekf {
 
@@ -35,19 +40,29 @@ struct Layout {
   static constexpr int landmark(int j) { return kPoseSize + 2 * j; }  ///< first row of landmark j
 };
 
+/// Pairs fused per block of the sequential update: 2 x kUpdateBlockPairs columns of scratch per
+/// state row. Two pairs (four columns) let the downdate share each row's loads between four
+/// products; one pair would halve the scratch and cost more instructions per covariance entry.
+constexpr int kUpdateBlockPairs = 2;
+constexpr int kUpdateBlockCols = 2 * kUpdateBlockPairs;
+
 /// Caller-owned scratch of predict_local() and update(); typically a static object on the device.
+/// O(n): the update's gain is one block of columns at a time (design.md, "Covariance engine").
 template <typename T, class B>
 struct Workspace {
   static constexpr int kRows = Layout::landmark(B::kMaxLandmarks);
-  static constexpr int kCols = 2 * B::kMaxObservations;
-  std::array<T, static_cast<std::size_t>(kRows) * kCols> W;   ///< P H^T, then P H^T L^-T (row-major)
-  std::array<T, static_cast<std::size_t>(kCols) * kCols> L;   ///< Cholesky factor of S (row-major)
-  std::array<T, kCols> nu;                                     ///< stacked innovations, then L^-1 nu
+  std::array<T, static_cast<std::size_t>(kRows) * kUpdateBlockCols> V;  ///< P H_b^T, then P H_b^T L^-T (row-major)
+  std::array<T, 2 * B::kMaxObservations> nu;                   ///< per pair: innovation at the linearisation point
+  std::array<Vec2<T>, B::kMaxObservations> l0;                 ///< per pair: its landmark before the update
   std::array<std::int16_t, B::kMaxObservations> obs;           ///< pair -> observation
   std::array<std::int16_t, B::kMaxObservations> lm;            ///< pair -> landmark
   std::array<Mat23<T>, B::kMaxObservations> Hp;                ///< pair -> dh/dpose
   std::array<Mat2<T>, B::kMaxObservations> Hl;                 ///< pair -> dh/dlandmark
-  std::array<std::int16_t, B::kMaxCandidates> cand;            ///< local map: candidate -> landmark
+  /// Diagnostics of the last update(): blocks after the first whose S rounding left not positive
+  /// definite (their fusion skipped, PX4-style), and variances floored (kMinVarianceRatio).
+  int rejected_blocks = 0;
+  int floored_variances = 0;
+  std::array<std::uint16_t, B::kMaxCandidates> cand;           ///< local map: candidate -> landmark
   std::array<T, B::kMaxCandidates> cand_range;                 ///< local map: predicted range [m]
   std::array<Mat23<T>, B::kMaxCandidates> cand_Hp;             ///< local map: dh/dpose
   std::array<Mat2<T>, B::kMaxCandidates> cand_Hl;              ///< local map: dh/dlandmark
@@ -114,6 +129,11 @@ template <typename T, class B>
 class Slam {
  public:
   static constexpr int kMaxState = Layout::landmark(B::kMaxLandmarks);
+  /// Scalars of the packed covariance: the upper triangle of a kMaxState x kMaxState matrix.
+  static constexpr std::size_t kPackedSize = static_cast<std::size_t>(kMaxState) * (kMaxState + 1) / 2;
+  /// Variance floor of the update: no fusion may shrink a variance below this fraction of its
+  /// value before the block (one scan's information gain is orders of magnitude smaller here).
+  static constexpr T kMinVarianceRatio = T(1e-6);
 
   /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
@@ -127,8 +147,7 @@ class Slam {
     x_[0] = x0.x;
     x_[1] = x0.y;
     x_[2] = wrap_angle(x0.theta);
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) P(r, c) = P0(r, c);
+    set_sym<3>(0, T(0.5) * (P0 + P0.transpose()));
     return Status::kOk;
   }
 
@@ -143,12 +162,9 @@ class Slam {
     x_[1] = x.y;
     x_[2] = wrap_angle(x.theta);
     updated_ = false;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) P(r, c) = Pxx(r, c);
+    set_sym<3>(0, T(0.5) * (Pxx + Pxx.transpose()));
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
-      const int l = Layout::landmark(j);
-      set_block<3, 2>(0, l, Mat32<T>::Zero());
-      set_block<2, 3>(l, 0, Mat32<T>::Zero().transpose());
+      set_block<3, 2>(0, Layout::landmark(j), Mat32<T>::Zero());
     }
     return Status::kOk;
   }
@@ -178,7 +194,12 @@ class Slam {
   }
   const FilterOptions& options() const { return options_; }
   T x(int i) const { return x_[i]; }
-  T cov(int r, int c) const { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
+  /// Entry (r, c) of the covariance (symmetric: cov(r, c) == cov(c, r), one stored scalar).
+  T cov(int r, int c) const { return p_[packed_index(r, c)]; }
+  /// Where entry (r, c) lives in the packed upper triangle (column by column).
+  static constexpr std::size_t packed_index(int r, int c) {
+    return r <= c ? static_cast<std::size_t>(c) * (c + 1) / 2 + r : static_cast<std::size_t>(r) * (r + 1) / 2 + c;
+  }
 
   /// Moves the robot by one odometry interval.
   /// @return kOk; kNonFinite (also when the new pose or covariance would overflow); kInvalidInput
@@ -207,12 +228,10 @@ class Slam {
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
       if (!(F * block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
     }
-    set_block<3, 3>(0, 0, T(0.5) * (Prr + Prr.transpose()));
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
+    set_sym<3>(0, T(0.5) * (Prr + Prr.transpose()));
+    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks: only the pose rows change, O(n)
       const int l = Layout::landmark(j);
-      const Mat32<T> Prl = F * block<3, 2>(0, l);
-      set_block<3, 2>(0, l, Prl);
-      set_block<2, 3>(l, 0, Prl.transpose());
+      set_block<3, 2>(0, l, F * block<3, 2>(0, l));
     }
     x_[0] = next.x;
     x_[1] = next.y;
@@ -252,7 +271,7 @@ class Slam {
         idx[k] = idx[k - 1];
       }
       rng[k] = r;
-      idx[k] = static_cast<std::int16_t>(j);
+      idx[k] = static_cast<std::uint16_t>(j);
     }
     out.count = n;
     out.C.resize(2 * n, 2 * n);
@@ -265,7 +284,7 @@ class Slam {
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
       const int la = Layout::landmark(idx[a]);
       // Row a of H P: the 2 x 3 pose part and, per b, the 2 x 2 landmark part.
-      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * block<2, 3>(la, 0);
+      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * block<3, 2>(0, la).transpose();  // P_lr = P_rl^T, stored once
       for (int b = 0; b <= a; ++b) {  // <= kMaxCandidates
         const int lb = Layout::landmark(idx[b]);
         const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
@@ -303,79 +322,108 @@ class Slam {
       ws.nu[2 * p + 1] = nu.y();
       ws.obs[p] = static_cast<std::int16_t>(i);
       ws.lm[p] = static_cast<std::int16_t>(j);
+      ws.l0[p] = landmark(j);
       ++p;
     }
+    ws.rejected_blocks = 0;
+    ws.floored_variances = 0;
     if (p == 0) return Status::kOk;
     const int n = dim();
-    const int m = 2 * p;
-    auto W = [&](int r, int c) -> T& { return ws.W[static_cast<std::size_t>(r) * m + c]; };
-    auto L = [&](int r, int c) -> T& { return ws.L[static_cast<std::size_t>(r) * m + c]; };
-    // P H^T, two columns per pair.  O(n p)
-    for (int r = 0; r < n; ++r) {  // <= kMaxState
-      for (int k = 0; k < p; ++k) {  // <= kMaxObservations
-        const int l = Layout::landmark(ws.lm[k]);
+    const T pose0[3] = {x_[0], x_[1], x_[2]};
+    constexpr int G = kUpdateBlockPairs;
+    constexpr int K = kUpdateBlockCols;
+    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
+    // Sequential blocks of G pairs, every one linearised where the batch is (design.md, "Covariance
+    // engine"): with S = L L^T of the whole batch, the block's Schur complement is its diagonal
+    // block of L, which the block's S from the already-updated P equals; so the blocks together are
+    // the batch update x <- x + W L^-1 nu, P <- P - W W^T, W = P H^T L^-T, and need O(n) scratch.
+    for (int b0 = 0; b0 < p; b0 += G) {  // <= ceil(kMaxObservations / G) blocks
+      const int q = p - b0 < G ? p - b0 : G;  // pairs in this block
+      const int k = 2 * q;                     // rows of H_b
+      // A = P H_b^T, K columns (the unused ones of a short block zero).  O(n)
+      for (int r = 0; r < n; ++r) {  // <= kMaxState
+        const T pr0 = cov(r, 0), pr1 = cov(r, 1), pr2 = cov(r, 2);
+        for (int a = 0; a < G; ++a) {
+          if (a >= q) {
+            V(r, 2 * a) = T(0);
+            V(r, 2 * a + 1) = T(0);
+            continue;
+          }
+          const int l = Layout::landmark(ws.lm[b0 + a]);
+          const T pl0 = cov(r, l), pl1 = cov(r, l + 1);
+          const Mat23<T>& Hp = ws.Hp[b0 + a];
+          const Mat2<T>& Hl = ws.Hl[b0 + a];
+          for (int u = 0; u < 2; ++u) {
+            V(r, 2 * a + u) = Hp(u, 0) * pr0 + Hp(u, 1) * pr1 + Hp(u, 2) * pr2 + Hl(u, 0) * pl0 + Hl(u, 1) * pl1;
+          }
+        }
+      }
+      // S_b = H_b A + R_b (lower triangle) and the block's innovation at the linearisation point:
+      // nu - H (x - x0), x0 the state before the first block (H touches the pose and one landmark).
+      T L[K][K] = {};
+      T w[K] = {};
+      for (int a = 0; a < q; ++a) {
+        const int pa = b0 + a;
+        const int la = Layout::landmark(ws.lm[pa]);
+        const Vec2<T> dl = landmark(ws.lm[pa]) - ws.l0[pa];
+        const T dp[3] = {x_[0] - pose0[0], x_[1] - pose0[1], wrap_angle(x_[2] - pose0[2])};
         for (int u = 0; u < 2; ++u) {
-          T s = T(0);
-          for (int t = 0; t < 3; ++t) s += cov(r, t) * ws.Hp[k](u, t);
-          for (int t = 0; t < 2; ++t) s += cov(r, l + t) * ws.Hl[k](u, t);
-          W(r, 2 * k + u) = s;
+          const int row = 2 * a + u;
+          for (int col = 0; col <= row; ++col) {  // <= K
+            T s = T(0);
+            for (int t = 0; t < 3; ++t) s += ws.Hp[pa](u, t) * V(t, col);
+            for (int t = 0; t < 2; ++t) s += ws.Hl[pa](u, t) * V(la + t, col);
+            if (col / 2 == a) s += obs.R[ws.obs[pa]](u, col % 2);
+            L[row][col] = s;
+          }
+          T h = T(0);
+          for (int t = 0; t < 3; ++t) h += ws.Hp[pa](u, t) * dp[t];
+          for (int t = 0; t < 2; ++t) h += ws.Hl[pa](u, t) * dl(t);
+          w[row] = ws.nu[2 * pa + u] - h;
         }
       }
-    }
-    // S = H (P H^T) + R, lower triangle, then its Cholesky factor.  O(p^2), O(p^3)
-    for (int a = 0; a < p; ++a) {  // <= kMaxObservations
-      const int la = Layout::landmark(ws.lm[a]);
-      for (int u = 0; u < 2; ++u) {
-        const int row = 2 * a + u;
-        for (int col = 0; col <= row; ++col) {  // <= 2 kMaxObservations
-          T s = T(0);
-          for (int t = 0; t < 3; ++t) s += ws.Hp[a](u, t) * W(t, col);
-          for (int t = 0; t < 2; ++t) s += ws.Hl[a](u, t) * W(la + t, col);
-          if (col / 2 == a) s += obs.R[ws.obs[a]](u, col % 2);
-          L(row, col) = s;
+      bool spd = true;
+      for (int j = 0; j < k && spd; ++j) {  // <= K: in-place Cholesky
+        T d = L[j][j];
+        for (int t = 0; t < j; ++t) d -= L[j][t] * L[j][t];
+        spd = d > T(0) && std::isfinite(d);
+        if (!spd) break;
+        L[j][j] = std::sqrt(d);
+        for (int i = j + 1; i < k; ++i) {  // <= K
+          T s = L[i][j];
+          for (int t = 0; t < j; ++t) s -= L[i][t] * L[j][t];
+          L[i][j] = s / L[j][j];
         }
       }
-    }
-    for (int j = 0; j < m; ++j) {  // <= 2 kMaxObservations: in-place Cholesky
-      T d = L(j, j);
-      for (int t = 0; t < j; ++t) d -= L(j, t) * L(j, t);
-      if (!(d > T(0))) return Status::kNotPositiveDefinite;
-      L(j, j) = std::sqrt(d);
-      for (int i = j + 1; i < m; ++i) {  // <= 2 kMaxObservations
-        T s = L(i, j);
-        for (int t = 0; t < j; ++t) s -= L(i, t) * L(j, t);
-        L(i, j) = s / L(j, j);
+      if (!spd) {
+        // The first block runs before any change: an S that is not positive definite there is the
+        // caller's (validate-then-mutate). Later, only rounding in P can cause it: skip the block.
+        if (b0 == 0) return Status::kNotPositiveDefinite;
+        ++ws.rejected_blocks;
+        continue;
       }
-    }
-    // Nothing below can fail: the state changes from here on.
-    if (!updated_) {  // the pose the next prediction linearises at (FEJ)
-      prior_[0] = x_[0];
-      prior_[1] = x_[1];
-      updated_ = true;
-    }
-    auto forward = [&](auto&& v) {  // v <- L^-1 v, v indexed 0 .. m-1
-      for (int i = 0; i < m; ++i) {  // <= 2 kMaxObservations
-        T s = v(i);
-        for (int t = 0; t < i; ++t) s -= L(i, t) * v(t);
-        v(i) = s / L(i, i);
+      if (b0 == 0 && !updated_) {  // nothing below can fail; the pose the next prediction linearises at (FEJ)
+        prior_[0] = x_[0];
+        prior_[1] = x_[1];
+        updated_ = true;
       }
-    };
-    forward([&](int i) -> T& { return ws.nu[i]; });
-    for (int r = 0; r < n; ++r) forward([&](int i) -> T& { return W(r, i); });  // W <- P H^T L^-T
-    for (int r = 0; r < n; ++r) {  // x <- x + W (L^-1 nu)
-      T s = T(0);
-      for (int k = 0; k < m; ++k) s += W(r, k) * ws.nu[k];
-      x_[r] += s;
-    }
-    x_[2] = wrap_angle(x_[2]);
-    for (int r = 0; r < n; ++r) {  // P <- P - W W^T, symmetric by construction  O(n^2 p)
-      for (int c = 0; c <= r; ++c) {
-        T s = T(0);
-        for (int k = 0; k < m; ++k) s += W(r, k) * W(c, k);
-        const T v = T(0.5) * (P(r, c) + P(c, r)) - s;
-        P(r, c) = v;
-        P(c, r) = v;
+      for (int i = 0; i < k; ++i) {  // w <- L^-1 nu_b;  <= K
+        for (int t = 0; t < i; ++t) w[i] -= L[i][t] * w[t];
+        w[i] /= L[i][i];
       }
+      for (int r = 0; r < n; ++r) {  // V <- A L^-T (per row), x <- x + V w;  <= kMaxState
+        T dx = T(0);
+        for (int i = 0; i < k; ++i) {  // <= K
+          T v = V(r, i);
+          for (int t = 0; t < i; ++t) v -= L[i][t] * V(r, t);
+          v /= L[i][i];
+          V(r, i) = v;
+          dx += v * w[i];
+        }
+        x_[r] += dx;
+      }
+      x_[2] = wrap_angle(x_[2]);
+      downdate(n, ws);
     }
     return Status::kOk;
   }
@@ -409,15 +457,14 @@ class Slam {
         if (!std::isfinite(s)) return Status::kNonFinite;
       }
     }
-    for (int c = 0; c < n; ++c) {  // <= kMaxState: P_lx = Jp P_rx
+    for (int c = 0; c < n; ++c) {  // <= kMaxState: P_lx = Jp P_rx, the new columns k, k + 1
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
         for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
-        P(k + u, c) = s;
         P(c, k + u) = s;
       }
     }
-    set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
+    set_sym<2>(k, T(0.5) * (Pll + Pll.transpose()));
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
@@ -436,12 +483,9 @@ class Slam {
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
     for (int c = 0; c < k; ++c) {  // <= kMaxState
-      for (int u = 0; u < 2; ++u) {
-        P(k + u, c) = T(0);
-        P(c, k + u) = T(0);
-      }
+      for (int u = 0; u < 2; ++u) P(c, k + u) = T(0);
     }
-    set_block<2, 2>(k, k, T(0.5) * (Pll + Pll.transpose()));
+    set_sym<2>(k, T(0.5) * (Pll + Pll.transpose()));
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
@@ -524,10 +568,12 @@ class Slam {
     if (kept == n_) return Status::kOk;
     auto old_row = [&](int r) { return r < Layout::kPoseSize ? r : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2; };
     const int n = Layout::landmark(kept);
-    for (int r = 0; r < n; ++r) {  // <= kMaxState
-      const int orow = old_row(r);
-      for (int c = 0; c < n; ++c) P(r, c) = P(orow, old_row(c));  // <= kMaxState
-      x_[r] = x_[orow];
+    // Packed: old_row is increasing, so the source of (r, c), r <= c, lies at or after it in the
+    // column-by-column order; copying in that order reads every source before it is overwritten.
+    for (int c = 0; c < n; ++c) {  // <= kMaxState
+      const int ocol = old_row(c);
+      for (int r = 0; r <= c; ++r) P(r, c) = P(old_row(r), ocol);  // <= kMaxState
+      x_[c] = x_[ocol];
     }
     for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
       id_[k] = id_[keep[k]];
@@ -579,8 +625,41 @@ class Slam {
     if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
     return Status::kOk;
   }
-  T& P(int r, int c) { return p_[static_cast<std::size_t>(r) * kMaxState + c]; }
+  /// P <- P - V V^T over the packed upper triangle (the K columns of ws.V); a variance that
+  /// rounding would take below kMinVarianceRatio of its value before is floored there (raising a
+  /// diagonal entry adds a positive semidefinite matrix, so P stays positive definite).  O(n^2 K)
+  void downdate(int n, Workspace<T, B>& ws) {
+    constexpr int K = kUpdateBlockCols;
+    const T* v = ws.V.data();
+    for (int c = 0; c < n; ++c) {  // <= kMaxState columns
+      T vc[K];
+      for (int t = 0; t < K; ++t) vc[t] = v[static_cast<std::size_t>(c) * K + t];
+      T* pc = &p_[static_cast<std::size_t>(c) * (c + 1) / 2];
+      for (int r = 0; r < c; ++r) {  // <= kMaxState rows above the diagonal
+        const T* vr = v + static_cast<std::size_t>(r) * K;
+        T s = vr[0] * vc[0];
+        for (int t = 1; t < K; ++t) s += vr[t] * vc[t];
+        pc[r] -= s;
+      }
+      T s = vc[0] * vc[0];
+      for (int t = 1; t < K; ++t) s += vc[t] * vc[t];
+      const T floor = pc[c] * kMinVarianceRatio;
+      T nv = pc[c] - s;
+      if (!(nv >= floor)) {
+        nv = floor;
+        ++ws.floored_variances;
+      }
+      pc[c] = nv;
+    }
+  }
+  T& P(int r, int c) { return p_[packed_index(r, c)]; }
   T P(int r, int c) const { return cov(r, c); }
+  /// Writes a symmetric N x N diagonal block at (r0, r0): its upper triangle.
+  template <int N>
+  void set_sym(int r0, const Eigen::Matrix<T, N, N>& b) {
+    for (int c = 0; c < N; ++c)
+      for (int r = 0; r <= c; ++r) P(r0 + r, r0 + c) = b(r, c);
+  }
   template <int R, int C>
   Eigen::Matrix<T, R, C> block(int r0, int c0) const {
     Eigen::Matrix<T, R, C> b;
@@ -610,7 +689,7 @@ class Slam {
   std::array<std::uint8_t, B::kMaxLandmarks> misses_{};
   std::array<std::uint8_t, B::kMaxLandmarks> age_{};  ///< reviews since augment, while tentative
   FeatureId next_id_ = 0;
-  std::array<T, static_cast<std::size_t>(kMaxState) * kMaxState> p_{};
+  std::array<T, kPackedSize> p_{};  ///< P, packed (packed_index)
   int n_ = 0;
 };
 

@@ -11,14 +11,9 @@
 
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/range_bearing.hpp"  // innovation()
 
 namespace geojcbb {
-
-/// Innovation z - h with the bearing wrapped into (-pi, pi].
-template <typename T>
-Vec2<T> innovation(const Vec2<T>& z, const Vec2<T>& h) {
-  return Vec2<T>(z.x() - h.x(), wrap_angle(z.y() - h.y()));
-}
 
 /// d2 = nu^T S^-1 nu for a 2x2 symmetric positive definite S (closed form).
 template <typename T>
