@@ -63,6 +63,9 @@ struct Slam {
   node::SlamStep<float, B> step;
   ObservationsF obs;
   node::StepResult<float, B> res;
+  // configure()'s settings are built here, not on the stack: with make_strategy inlined below it, a
+  // local copy took geojcbb_slam_configure's frame to 552 B on the Cortex-M4F (limit 512).
+  node::StepSettings<float> settings;
 };
 
 // The header's sizes are exact, so a change of layout (new capacity, new workspace member) shows
@@ -235,7 +238,8 @@ static Slam* slam_of(geojcbb_slam* handle) {
 geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* in) {
   Slam* s = slam_of(handle);
   if (s == nullptr || in == nullptr || !strategy_ok(static_cast<int>(in->strategy))) return GEOJCBB_INVALID_INPUT;
-  node::StepSettings<float> st;
+  node::StepSettings<float>& st = s->settings;
+  st = node::StepSettings<float>{};
   st.strategy = static_cast<Strategy>(in->strategy);
   st.params = to_params(in->params);
   st.new_landmark_level = in->new_landmark_level;

@@ -38,7 +38,7 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   abs_y += r.mean_abs_y_m;
   double nees = 0;
   for (const StepRecord& k : r.steps) nees += k.pose_nees;
-  anees_sum += r.steps.empty() ? 0 : nees / r.steps.size();
+  anees_sum += r.steps.empty() ? 0 : nees / static_cast<double>(r.steps.size());
   if (nees_sum.size() < r.steps.size()) {
     nees_sum.resize(r.steps.size(), 0.0);
     ex_sum.resize(r.steps.size(), 0.0);

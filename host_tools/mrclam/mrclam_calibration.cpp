@@ -162,7 +162,7 @@ RobotCalibration calibrate_robot(const Dataset& ds, const RobotLog& log, const C
     double cost = 0;
     const std::vector<Window> ws = windows(0.25, lag);
     for (const Window& x : ws) cost += (x.dth - x.cw) * (x.dth - x.cw);
-    cost /= std::max<std::size_t>(ws.size(), 1);
+    cost /= static_cast<double>(std::max<std::size_t>(ws.size(), 1));
     if (cost < best_cost) {
       best_cost = cost;
       cal.latency_s = lag;

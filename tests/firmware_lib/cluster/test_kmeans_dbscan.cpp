@@ -98,7 +98,7 @@ TEST_CASE_TEMPLATE("DBSCAN on random sets equals connected components of core po
   for (int trial = 0; trial < 300; ++trial) {
     const int m = 1 + static_cast<int>(rng() % 16);
     const int min_points = 1 + static_cast<int>(rng() % 3);
-    const double eps = 0.5 + 1.5 * (rng() % 100) / 100.0;
+    const double eps = 0.5 + 1.5 * static_cast<double>(rng() % 100) / 100.0;
     Points<T, Wide> p;
     for (int i = 0; i < m; ++i) p[i] = Vec2<T>(T(u(rng)), T(u(rng)));
     Groups<Wide> g;

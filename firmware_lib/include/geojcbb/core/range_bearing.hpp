@@ -60,7 +60,7 @@ Vec2<T> inverse_observe(const Pose2<T>& x_r, const Vec2<T>& z, Mat23<T>* J_l_pos
   const T a = x_r.theta + z.y();
   const T c = fmath::cos(a);
   const T s = fmath::sin(a);
-  const Vec2<T> l(x_r.x + z.x() * c, x_r.y + z.x() * s);
+  Vec2<T> l(x_r.x + z.x() * c, x_r.y + z.x() * s);
   if (J_l_pose != nullptr) {
     *J_l_pose << T(1), T(0), -z.x() * s,  //
         T(0), T(1), z.x() * c;

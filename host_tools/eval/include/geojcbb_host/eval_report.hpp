@@ -70,8 +70,8 @@ inline double chi2_quantile_wh(double p, long k) {
     z = (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1);
   }
-  const double h = 2.0 / (9.0 * k);
-  return k * std::pow(1 - h + z * std::sqrt(h), 3);
+  const double h = 2.0 / (9.0 * static_cast<double>(k));
+  return static_cast<double>(k) * std::pow(1 - h + z * std::sqrt(h), 3);
 }
 
 inline std::string csv_escape(const std::string& s) {
