@@ -58,6 +58,12 @@ struct StrategyParams {
   /// against chi2_inv in tests/firmware_lib/consistency/test_associate_consistency.cpp).
   T consistency_wide_d2 = T(23.025850929940457);
   T consistency_pair_d2 = T(10.827566170662733);
+  /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
+  /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
+  bool full_covariance_check = false;
+  /// EmOptions::stop: true keeps the papers' stop rule (objective tolerance only); false also stops
+  /// once the groups are stable and hard (issue 13).
+  bool em_objective_stop = false;
 };
 
 /// Builds a strategy's configuration.
@@ -85,6 +91,8 @@ template <typename T, class B>
   // temporary would cost the frame as much as a local copy).
   out.kmeans_max_iterations = kMaxKMeansIterations;
   out.em = EmOptions<T>{};
+  out.em.stop = p.em_objective_stop ? EmStop::kObjective : EmStop::kGroupsStable;
+  out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
   out.order_fewest_candidates_first = true;
   out.seed_min_pairings = 3;
   out.rjc = false;
