@@ -43,7 +43,7 @@ template <typename T, class B>
       !(std::isfinite(cfg.em.covariance_floor_m2) && cfg.em.covariance_floor_m2 > T(0)) ||
       (cfg.em.stop != EmStop::kObjective && cfg.em.stop != EmStop::kGroupsStable) ||
       cfg.em.stable_iterations < 1 || cfg.em.stable_iterations > kMaxEmIterations ||
-      !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(0.5)) ||
+      !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(1)) ||
       (cfg.covariance_check != CovarianceCheck::kWhereRead && cfg.covariance_check != CovarianceCheck::kFull) ||
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
