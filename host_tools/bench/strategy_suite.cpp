@@ -77,7 +77,7 @@ int run_strategy_suite(const BenchOptions& o) {
   // Issue 13's baseline: the behaviour before it (full check of C up front; the papers' EM stop).
   sp.condition_groups = false;
   sp.full_covariance_check = true;
-  sp.em_objective_stop = true;
+  sp.papers_em = true;
   const std::size_t kJcbbOld = variants.size(), kGeoOld = kJcbbOld + 1;
   Variant jcbb_old{"JCBB, before issue 13", {}};
   if (make_strategy(Strategy::kJcbb, sp, jcbb_old.cfg) != Status::kOk) return 2;

@@ -297,8 +297,9 @@ template <typename T, class B>
       for (int q = 0; q < ws.table.count[i] && !free_compatible; ++q)  // <= kMaxCandidates
         free_compatible = !taken_rule || ws.jcbb.used[ws.table.cand[i][q]] == 0;
       out.feature[i] = free_compatible || ws.declined[i] ? kUnmatched : kNewFeature;
-      out.d2[i] = ws.table.count[i] > 0 && !free_compatible ? ws.table.nearest_incompatible_d2[i]
-                                                            : ws.table.nearest_d2[i];
+      T nearest = T(0), nearest_incompatible = T(0);
+      nearest_d2(obs, pred, ws.table, cfg.gate.individual, i, nearest, nearest_incompatible);
+      out.d2[i] = ws.table.count[i] > 0 && !free_compatible ? nearest_incompatible : nearest;
     }
   }
   out.pairings = pairings;

@@ -178,9 +178,10 @@ bool same_groups(const Groups<B>& a, const Groups<B>& b, int m) {
 }
 }  // namespace
 
-// Issue 13: the default stop (groups unchanged over two iterations) returns the groups of the papers'
-// rule (the objective tolerance) on mixtures whose groups are clear, in fewer iterations; with a
-// hardness margin, where the groups are not clear (soft responsibilities) it runs as the papers' rule.
+// Issue 13: the default start (k-means) and stop (groups unchanged over two iterations) return the
+// groups of the start and stop before it (farthest-first seeds, objective tolerance) on mixtures whose
+// groups are clear, in fewer iterations; with a hardness margin, where the groups are not clear
+// (soft responsibilities) the stop is the papers' rule.
 TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' groups, sooner", T, float, double) {
   std::mt19937_64 rng(29);
   const Eigen::Matrix2d s = Eigen::Matrix2d::Identity() * 0.09;
@@ -196,8 +197,9 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
     for (int k : {3, 0}) {
       CAPTURE(rep);
       CAPTURE(k);
-      EmOptions<T> papers;
+      EmOptions<T> papers;  // before issue 13: farthest-first start, objective tolerance
       papers.stop = EmStop::kObjective;
+      papers.start = EmStart::kFarthestFirst;
       Groups<Small> g_papers, g_stable;
       const EmStats<T> a = gmm_em(p, m, k, papers, *ws, g_papers);
       const EmStats<T> b = gmm_em(p, m, k, EmOptions<T>{}, *ws, g_stable);
@@ -215,6 +217,7 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
   auto ws = std::make_unique<EmWorkspace<T, Small>>();
   EmOptions<T> papers, hard;
   papers.stop = EmStop::kObjective;
+  papers.start = hard.start = EmStart::kFarthestFirst;  // the same start: only the stop differs
   hard.hard_margin = T(0.01);
   Groups<Small> g_papers, g_hard;
   const EmStats<T> a = gmm_em(p, m, 2, papers, *ws, g_papers);
@@ -249,6 +252,7 @@ TEST_CASE("EM in float finds the groups and the K of EM in double") {
         EmOptions<float> of;
         od.stop = stop;
         of.stop = stop;
+        od.start = of.start = stop == EmStop::kObjective ? EmStart::kFarthestFirst : EmStart::kKMeans;
         Groups<Small> gd, gf;
         const EmStats<double> sd = gmm_em(pd, m, k, od, *wd, gd);
         const EmStats<float> sf = gmm_em(pf, m, k, of, *wf, gf);

@@ -9,12 +9,15 @@
 // kMinComponentWeight is dropped.
 // Labels by arg max gamma (eq. 9). K is fixed, or chosen in [1, min(MaxGroups, m)] by BIC.
 // Everything in the Scalar T, the BIC included (float on the controller: no soft-float double).
-// Stop (EmOptions::stop): the papers' objective tolerance, or (default, issue 13) as soon as the
-// groups are stable and hard (core/grouping_options.hpp).
-// Bounds: max_iterations <= kMaxEmIterations per fit; K fits when choosing by BIC.
+// Start (EmOptions::start): hard responsibilities to the nearest farthest-first seed, or (default,
+// issue 13) to the k-means groups from those seeds. Stop (EmOptions::stop): the papers' objective
+// tolerance, or (default, issue 13) also once the groups are stable (core/grouping_options.hpp).
+// Bounds: max_iterations <= kMaxEmIterations per fit (and kMaxKMeansIterations for the k-means
+// start); K fits when choosing by BIC.
 #pragma once
 
 #include "geojcbb/cluster/groups.hpp"
+#include "geojcbb/cluster/kmeans.hpp"
 #include "geojcbb/core/grouping_options.hpp"
 
 namespace geojcbb {
@@ -126,35 +129,50 @@ void m_step(const Points<T, B>& pts, int m, T floor, EmWorkspace<T, B>& ws) {
   ws.k = kept;
 }
 
-/// One EM fit with k components from farthest-first seeds (hard nearest-seed start).
+/// One EM fit with k components from hard responsibilities: to the nearest farthest-first seed, or
+/// to the k-means groups from those seeds (EmOptions::start).
 template <typename T, class B>
 EmStats<T> fit(const Points<T, B>& pts, int m, int k, const EmOptions<T>& opt, EmWorkspace<T, B>& ws) {
   EmStats<T> st;
-  std::array<Vec2<T>, B::kMaxGroups> seeds;
-  ws.k = farthest_first<T, B>(pts, m, k, seeds);
-  for (int j = 0; j < m; ++j) {  // <= kMaxObservations: hard responsibilities to the nearest seed
-    int arg = 0;
-    for (int q = 1; q < ws.k; ++q) {  // <= kMaxGroups
-      if ((pts[j] - seeds[q]).squaredNorm() < (pts[j] - seeds[arg]).squaredNorm()) arg = q;
+  if (opt.start == EmStart::kKMeans) {
+    Groups<B> g;
+    kmeans(pts, m, k, kMaxKMeansIterations, g);
+    ws.k = g.count;
+    for (int j = 0; j < m; ++j) ws.label[j] = g.label[j];  // <= kMaxObservations
+  } else {
+    std::array<Vec2<T>, B::kMaxGroups> seeds;
+    ws.k = farthest_first<T, B>(pts, m, k, seeds);
+    for (int j = 0; j < m; ++j) {  // <= kMaxObservations: the nearest seed
+      int arg = 0;
+      for (int q = 1; q < ws.k; ++q) {  // <= kMaxGroups
+        if ((pts[j] - seeds[q]).squaredNorm() < (pts[j] - seeds[arg]).squaredNorm()) arg = q;
+      }
+      ws.label[j] = static_cast<std::int8_t>(arg);
     }
-    for (int q = 0; q < ws.k; ++q) ws.gamma[j][q] = q == arg ? T(1) : T(0);  // <= kMaxGroups
-    ws.label[j] = static_cast<std::int8_t>(arg);
+  }
+  for (int j = 0; j < m; ++j) {  // <= kMaxObservations: hard responsibilities
+    for (int q = 0; q < ws.k; ++q) ws.gamma[j][q] = q == ws.label[j] ? T(1) : T(0);  // <= kMaxGroups
   }
   const T floor = opt.covariance_floor_m2;
   const bool by_groups = opt.stop == EmStop::kGroupsStable;
+  int k_before = ws.k;
   m_step(pts, m, floor, ws);
   ws.trace_length = 0;
   T q_old = T(0);
-  // Labels are compared with the previous E-step's; the seeds' labels are not an E-step's (a
-  // component may have been dropped, renumbering the rest), so the first E-step never counts.
-  e_step(pts, m, floor, opt.hard_margin, ws, q_old);
+  // Labels are compared with the previous labels (the start's, then each E-step's), under the same
+  // numbering only: not after the M-step dropped a component.
+  int changed = e_step(pts, m, floor, opt.hard_margin, ws, q_old);
   ws.trace[ws.trace_length++] = q_old;
-  int stable = 0;
+  int stable = changed == 0 && ws.k == k_before && ws.hard ? 1 : 0;
   for (int it = 0; it < opt.max_iterations; ++it) {  // <= kMaxEmIterations
-    const int k_before = ws.k;
+    if (by_groups && stable >= opt.stable_iterations) {  // the start's groups came out unchanged
+      st.converged = true;
+      break;
+    }
+    k_before = ws.k;
     m_step(pts, m, floor, ws);
     T q_new = T(0);
-    const int changed = e_step(pts, m, floor, opt.hard_margin, ws, q_new);
+    changed = e_step(pts, m, floor, opt.hard_margin, ws, q_new);
     ws.trace[ws.trace_length++] = q_new;
     st.iterations = it + 1;
     stable = changed == 0 && ws.k == k_before && ws.hard ? stable + 1 : 0;

@@ -31,12 +31,23 @@ enum class EmStop : std::uint8_t {
   kGroupsStable,
 };
 
+/// Where an EM fit starts (cluster/gmm_em.hpp).
+enum class EmStart : std::uint8_t {
+  /// Hard responsibilities to the nearest farthest-first seed (cluster/groups.hpp), the start
+  /// before issue 13.
+  kFarthestFirst,
+  /// Issue 13: hard responsibilities from k-means (Lloyd's iterations from the same seeds, no exp
+  /// or log; the usual EM initialisation): EM starts next to its fixed point.
+  kKMeans,
+};
+
 template <typename T>
 struct EmOptions {
   int max_iterations = kMaxEmIterations;  ///< 1 .. kMaxEmIterations
   T tolerance = T(1e-4);                  ///< stop when Q gains less than tolerance * (1 + |Q|)
   T covariance_floor_m2 = T(0.04);        ///< eps: a lone point is a Gaussian of 0.2 m standard deviation
   EmStop stop = EmStop::kGroupsStable;
+  EmStart start = EmStart::kKMeans;
   int stable_iterations = 2;  ///< kGroupsStable: iterations with unchanged groups, 1 .. kMaxEmIterations
   T hard_margin = T(1);       ///< kGroupsStable: 0 .. 1 (1: no hardness required)
 };

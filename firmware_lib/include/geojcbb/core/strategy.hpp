@@ -61,9 +61,9 @@ struct StrategyParams {
   /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
   /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
   bool full_covariance_check = false;
-  /// EmOptions::stop: true keeps the papers' stop rule (objective tolerance only); false also stops
-  /// once the groups are stable and hard (issue 13).
-  bool em_objective_stop = false;
+  /// GMM-EM as before issue 13: farthest-first start and the papers' stop rule (objective tolerance
+  /// only); false: the k-means start and the stop once the groups are stable (EmOptions).
+  bool papers_em = false;
 };
 
 /// Builds a strategy's configuration.
@@ -91,7 +91,8 @@ template <typename T, class B>
   // temporary would cost the frame as much as a local copy).
   out.kmeans_max_iterations = kMaxKMeansIterations;
   out.em = EmOptions<T>{};
-  out.em.stop = p.em_objective_stop ? EmStop::kObjective : EmStop::kGroupsStable;
+  out.em.stop = p.papers_em ? EmStop::kObjective : EmStop::kGroupsStable;
+  out.em.start = p.papers_em ? EmStart::kFarthestFirst : EmStart::kKMeans;
   out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
   out.order_fewest_candidates_first = true;
   out.seed_min_pairings = 3;

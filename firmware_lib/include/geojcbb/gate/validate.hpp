@@ -42,6 +42,7 @@ template <typename T, class B>
       !(std::isfinite(cfg.em.tolerance) && cfg.em.tolerance >= T(0)) ||
       !(std::isfinite(cfg.em.covariance_floor_m2) && cfg.em.covariance_floor_m2 > T(0)) ||
       (cfg.em.stop != EmStop::kObjective && cfg.em.stop != EmStop::kGroupsStable) ||
+      (cfg.em.start != EmStart::kFarthestFirst && cfg.em.start != EmStart::kKMeans) ||
       cfg.em.stable_iterations < 1 || cfg.em.stable_iterations > kMaxEmIterations ||
       !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(1)) ||
       (cfg.covariance_check != CovarianceCheck::kWhereRead && cfg.covariance_check != CovarianceCheck::kFull) ||
