@@ -178,7 +178,7 @@ bool same_groups(const Groups<B>& a, const Groups<B>& b, int m) {
 }
 }  // namespace
 
-// Issue 13: the default start (k-means) and stop (groups unchanged over two iterations) return the
+// Issue 13: the default start (k-means) and stop (an E-step leaves the groups unchanged) return the
 // groups of the start and stop before it (farthest-first seeds, objective tolerance) on mixtures whose
 // groups are clear, in fewer iterations; with a hardness margin, where the groups are not clear
 // (soft responsibilities) the stop is the papers' rule.

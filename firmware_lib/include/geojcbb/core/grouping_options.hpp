@@ -48,7 +48,7 @@ struct EmOptions {
   T covariance_floor_m2 = T(0.04);        ///< eps: a lone point is a Gaussian of 0.2 m standard deviation
   EmStop stop = EmStop::kGroupsStable;
   EmStart start = EmStart::kKMeans;
-  int stable_iterations = 2;  ///< kGroupsStable: iterations with unchanged groups, 1 .. kMaxEmIterations
+  int stable_iterations = 1;  ///< kGroupsStable: iterations with unchanged groups, 1 .. kMaxEmIterations
   T hard_margin = T(1);       ///< kGroupsStable: 0 .. 1 (1: no hardness required)
 };
 
