@@ -129,16 +129,16 @@ void m_step(const Points<T, B>& pts, int m, T floor, EmWorkspace<T, B>& ws) {
   ws.k = kept;
 }
 
-/// One EM fit with k components from hard responsibilities: to the nearest farthest-first seed, or
-/// to the k-means groups from those seeds (EmOptions::start).
+/// One EM fit with k components from hard responsibilities: to the groups `start` (the k-means
+/// start, computed by the caller so that k-means and this fit do not stack their frames) or, when
+/// null, to the nearest farthest-first seed.
 template <typename T, class B>
-EmStats<T> fit(const Points<T, B>& pts, int m, int k, const EmOptions<T>& opt, EmWorkspace<T, B>& ws) {
+EmStats<T> fit(const Points<T, B>& pts, int m, int k, const EmOptions<T>& opt, const Groups<B>* start,
+               EmWorkspace<T, B>& ws) {
   EmStats<T> st;
-  if (opt.start == EmStart::kKMeans) {
-    Groups<B> g;
-    kmeans(pts, m, k, kMaxKMeansIterations, g);
-    ws.k = g.count;
-    for (int j = 0; j < m; ++j) ws.label[j] = g.label[j];  // <= kMaxObservations
+  if (start != nullptr) {
+    ws.k = start->count;
+    for (int j = 0; j < m; ++j) ws.label[j] = start->label[j];  // <= kMaxObservations
   } else {
     std::array<Vec2<T>, B::kMaxGroups> seeds;
     ws.k = farthest_first<T, B>(pts, m, k, seeds);
@@ -213,7 +213,9 @@ EmStats<T> gmm_em(const Points<T, B>& pts, int m, int k, EmOptions<T> opt, EmWor
   const T log_m = by_bic ? fmath::log(static_cast<T>(m)) : T(0);
   int total = 0;
   for (int kk = k_lo; kk <= k_hi; ++kk) {  // <= kMaxGroups fits
-    const EmStats<T> st = em_detail::fit(pts, m, kk, opt, ws);
+    Groups<B> start;
+    if (opt.start == EmStart::kKMeans) kmeans(pts, m, kk, kMaxKMeansIterations, start);
+    const EmStats<T> st = em_detail::fit(pts, m, kk, opt, opt.start == EmStart::kKMeans ? &start : nullptr, ws);
     total += st.iterations;
     // BIC = -2 LL + p ln m with p = 6K - 1 free parameters (2 mean + 3 covariance + 1 weight each).
     const T bic = T(-2) * st.log_likelihood + static_cast<T>(6 * st.components - 1) * log_m;

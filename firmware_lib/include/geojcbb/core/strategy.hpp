@@ -50,6 +50,12 @@ struct StrategyParams {
   double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
   bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
+  /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
+  /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
+  bool full_covariance_check = false;
+  /// GMM-EM as before issue 13: farthest-first start and the papers' stop rule (objective tolerance
+  /// only); false: the k-means start and the stop once the groups are stable (EmOptions).
+  bool papers_em = false;
   /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
   T seed_min_position_var_m2 = T(4);
   /// The consistency graph's wide gate, chi2inv(0.99999, 2) = -2 ln(1e-5), and its pairwise test,
@@ -58,12 +64,6 @@ struct StrategyParams {
   /// against chi2_inv in tests/firmware_lib/consistency/test_associate_consistency.cpp).
   T consistency_wide_d2 = T(23.025850929940457);
   T consistency_pair_d2 = T(10.827566170662733);
-  /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
-  /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
-  bool full_covariance_check = false;
-  /// GMM-EM as before issue 13: farthest-first start and the papers' stop rule (objective tolerance
-  /// only); false: the k-means start and the stop once the groups are stable (EmOptions).
-  bool papers_em = false;
 };
 
 /// Builds a strategy's configuration.
