@@ -7,12 +7,11 @@
 //   -> merge (mutual exclusion across groups, joint re-check) -> decline (ambiguous pairings left
 //   kUnmatched, when an ambiguity margin is set) -> verify (pairings outside the answer's largest
 //   pairwise consistent subset dropped; issue 12) -> result
-// No heap: all working memory is the caller's Workspace; outputs are written only on kOk.
+// No heap: all working memory is the caller's Workspace; outputs are written only on kOk, at the end,
+// so a stage may check what it reads (C's cross blocks, issue 13) and still leave them untouched.
 #pragma once
 
-#include "geojcbb/cluster/dbscan.hpp"
-#include "geojcbb/cluster/gmm_em.hpp"
-#include "geojcbb/cluster/kmeans.hpp"
+#include "geojcbb/cluster/group.hpp"
 #include "geojcbb/consistency/consistent_hypothesis.hpp"
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
@@ -32,9 +31,8 @@ struct Workspace {
   CompatibilityTable<T, B> table;
   JcbbWorkspace<T, B> jcbb;
   SearchOutcome<T, B> outcome;
-  Points<T, B> points;
   Groups<B> groups;
-  EmWorkspace<T, B> em;
+  GroupingWorkspace<T, B> grouping;
   MergeWorkspace<T, B> merge;
   std::array<Hypothesis, B::kMaxObservations> hyp;
   std::array<bool, B::kMaxObservations> declined;  ///< per observation: ambiguous (decline stage)
@@ -49,30 +47,14 @@ struct Workspace {
 
 namespace pipeline_detail {
 
-/// Step 3b: splits the observations into groups. Returns the groups in ws.groups.
+/// Step 3b: splits the observations into groups (cluster/group.hpp, with the grouping options
+/// only). Returns the groups in ws.groups.
 template <typename T, class B>
 void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
            AssociationDiagnostics& diag) {
-  const int m = obs.count;
-  Groups<B>& g = ws.groups;
-  if (cfg.grouping == Grouping::kNone || m == 0) {
-    for (int i = 0; i < m; ++i) g.label[i] = 0;  // <= kMaxObservations
-    g.count = m > 0 ? 1 : 0;
-    return;
-  }
-  observation_points(obs, ws.points);
-  if (cfg.grouping == Grouping::kKMeans) {
-    const KMeansStats st = kmeans(ws.points, m, cfg.groups, cfg.kmeans_max_iterations, g);
-    diag.cluster_iterations = static_cast<std::uint16_t>(st.iterations);
-    diag.cluster_bound_hit = !st.converged;
-  } else if (cfg.grouping == Grouping::kDbscan) {
-    const DbscanStats st = dbscan(ws.points, m, cfg.dbscan_eps_m, cfg.dbscan_min_points, g);
-    diag.cluster_bound_hit = st.merged_for_capacity;
-  } else {
-    const EmStats st = gmm_em(ws.points, m, cfg.groups, cfg.em, ws.em, g);
-    diag.cluster_iterations = static_cast<std::uint16_t>(st.total_iterations);
-    diag.cluster_bound_hit = !st.converged;
-  }
+  const GroupingStats st = group_observations(obs, grouping_options(cfg), ws.grouping, ws.groups);
+  diag.cluster_iterations = static_cast<std::uint16_t>(st.iterations);
+  diag.cluster_bound_hit = st.bound_hit;
 }
 
 /// Decline stage: the pairings of observations marked ambiguous are removed (they become
@@ -172,7 +154,9 @@ template <typename T, class B>
 /// @param[in,out] ws working memory
 /// @param[out] out   the hypothesis; written only when kOk is returned
 /// @return kOk (an empty scan gives an empty answer; spent budgets are flagged in out.diag);
-///         otherwise the first failing check of validate(), or kNotPositiveDefinite when C is found
+///         otherwise the first failing check of validate(); kNonFinite / kNotSymmetric for a cross
+///         entry of C found bad where a joint or pairwise test reads it (CovarianceCheck::kWhereRead);
+///         or kNotPositiveDefinite when C is found
 ///         indefinite during a joint test or a pairwise distance test (seed, verify).
 template <typename T, class B>
 [[nodiscard]] Status associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
@@ -180,6 +164,8 @@ template <typename T, class B>
                                Association<T, B>& out) {
   Status s = validate(obs, pred, cfg);
   if (s != Status::kOk) return s;
+  // C's cross blocks are checked where the joint tests read them, unless validate() checked them all.
+  ws.jcbb.joint.check_reads(cfg.covariance_check != CovarianceCheck::kFull);
   const int m = obs.count;
   AssociationDiagnostics diag{};
   build_compatibility(obs, pred, cfg, ws.table, diag);
@@ -311,8 +297,9 @@ template <typename T, class B>
       for (int q = 0; q < ws.table.count[i] && !free_compatible; ++q)  // <= kMaxCandidates
         free_compatible = !taken_rule || ws.jcbb.used[ws.table.cand[i][q]] == 0;
       out.feature[i] = free_compatible || ws.declined[i] ? kUnmatched : kNewFeature;
-      out.d2[i] = ws.table.count[i] > 0 && !free_compatible ? ws.table.nearest_incompatible_d2[i]
-                                                            : ws.table.nearest_d2[i];
+      T nearest = T(0), nearest_incompatible = T(0);
+      nearest_d2(obs, pred, ws.table, cfg.gate.individual, i, nearest, nearest_incompatible);
+      out.d2[i] = ws.table.count[i] > 0 && !free_compatible ? nearest_incompatible : nearest;
     }
   }
   out.pairings = pairings;

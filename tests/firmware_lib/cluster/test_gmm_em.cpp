@@ -166,3 +166,100 @@ TEST_CASE_TEMPLATE("EM with K = 0 chooses the number of well-separated blobs by 
     CHECK(g.count == 3);
   }
 }
+
+namespace {
+/// True when two labelings are the same partition (labels compacted: equal arrays).
+template <class B>
+bool same_groups(const Groups<B>& a, const Groups<B>& b, int m) {
+  if (a.count != b.count) return false;
+  for (int i = 0; i < m; ++i)
+    if (a.label[i] != b.label[i]) return false;
+  return true;
+}
+}  // namespace
+
+// Issue 13: the default start (k-means) and stop (an E-step leaves the groups unchanged) return the
+// groups of the start and stop before it (farthest-first seeds, objective tolerance) on mixtures whose
+// groups are clear, in fewer iterations; with a hardness margin, where the groups are not clear
+// (soft responsibilities) the stop is the papers' rule.
+TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' groups, sooner", T, float, double) {
+  std::mt19937_64 rng(29);
+  const Eigen::Matrix2d s = Eigen::Matrix2d::Identity() * 0.09;
+  int fewer = 0;
+  for (int rep = 0; rep < 50; ++rep) {
+    std::uniform_real_distribution<double> u(-12, 12);
+    std::vector<Blob> blobs;
+    for (int b = 0; b < 3; ++b) blobs.push_back({{u(rng), u(rng)}, s, 4 + static_cast<int>(rng() % 5)});
+    Points<T, Small> p;
+    std::vector<int> truth;
+    const int m = draw<T, Small>(blobs, rng, p, truth);
+    auto ws = std::make_unique<EmWorkspace<T, Small>>();
+    for (int k : {3, 0}) {
+      CAPTURE(rep);
+      CAPTURE(k);
+      EmOptions<T> papers;  // before issue 13: farthest-first start, objective tolerance
+      papers.stop = EmStop::kObjective;
+      papers.start = EmStart::kFarthestFirst;
+      Groups<Small> g_papers, g_stable;
+      const EmStats<T> a = gmm_em(p, m, k, papers, *ws, g_papers);
+      const EmStats<T> b = gmm_em(p, m, k, EmOptions<T>{}, *ws, g_stable);
+      CHECK(b.total_iterations <= a.total_iterations);
+      fewer += b.total_iterations < a.total_iterations;
+      CHECK(same_groups(g_papers, g_stable, m));
+    }
+  }
+  CHECK(fewer > 20);
+  // With a hardness margin: soft responsibilities (one blob, K = 2) are never "hard", so the stop is
+  // the papers' rule and the fit runs as long.
+  Points<T, Small> p;
+  std::vector<int> truth;
+  const int m = draw<T, Small>({{{0, 0}, Eigen::Matrix2d::Identity(), 20}}, rng, p, truth);
+  auto ws = std::make_unique<EmWorkspace<T, Small>>();
+  EmOptions<T> papers, hard;
+  papers.stop = EmStop::kObjective;
+  papers.start = hard.start = EmStart::kFarthestFirst;  // the same start: only the stop differs
+  hard.hard_margin = T(0.01);
+  Groups<Small> g_papers, g_hard;
+  const EmStats<T> a = gmm_em(p, m, 2, papers, *ws, g_papers);
+  const EmStats<T> b = gmm_em(p, m, 2, hard, *ws, g_hard);
+  CHECK_FALSE(ws->hard);
+  CHECK(b.iterations == a.iterations);
+  CHECK(same_groups(g_papers, g_hard, m));
+}
+
+// Issue 13: EM and its BIC run in the Scalar (float on the controller; the BIC was double). Float and
+// double fits of the same points find the same groups and the same K where the data decide them.
+TEST_CASE("EM in float finds the groups and the K of EM in double") {
+  std::mt19937_64 rng(31);
+  const Eigen::Matrix2d s = Eigen::Matrix2d::Identity() * 0.09;
+  for (int rep = 0; rep < 40; ++rep) {
+    std::uniform_real_distribution<double> u(-15, 15);
+    std::vector<Blob> blobs;
+    const int nb = 1 + static_cast<int>(rng() % 4);
+    for (int b = 0; b < nb; ++b) blobs.push_back({{u(rng), u(rng)}, s, 5});
+    Points<double, Small> pd;
+    std::vector<int> truth;
+    const int m = draw<double, Small>(blobs, rng, pd, truth);
+    Points<float, Small> pf;
+    for (int i = 0; i < m; ++i) pf[i] = pd[i].cast<float>();
+    auto wd = std::make_unique<EmWorkspace<double, Small>>();
+    auto wf = std::make_unique<EmWorkspace<float, Small>>();
+    for (int k : {0, 3}) {
+      for (EmStop stop : {EmStop::kObjective, EmStop::kGroupsStable}) {
+        CAPTURE(rep);
+        CAPTURE(k);
+        EmOptions<double> od;
+        EmOptions<float> of;
+        od.stop = stop;
+        of.stop = stop;
+        od.start = of.start = stop == EmStop::kObjective ? EmStart::kFarthestFirst : EmStart::kKMeans;
+        Groups<Small> gd, gf;
+        const EmStats<double> sd = gmm_em(pd, m, k, od, *wd, gd);
+        const EmStats<float> sf = gmm_em(pf, m, k, of, *wf, gf);
+        CHECK(sd.components == sf.components);
+        CHECK(same_groups(gd, gf, m));
+        CHECK(sf.log_likelihood == doctest::Approx(sd.log_likelihood).epsilon(1e-3));
+      }
+    }
+  }
+}

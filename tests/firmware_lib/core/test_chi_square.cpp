@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "geojcbb/core/chi_square.hpp"
-#include "geojcbb/gate/thresholds.hpp"
+#include "geojcbb/core/gate_thresholds.hpp"
 
 using geojcbb::Status;
 

@@ -26,6 +26,9 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
     const char* name;
     Status want;
     std::function<void(Problem<T, B>&, AssociationConfig<T, B>&)> corrupt;
+    /// With C checked where read (issue 13), when it differs from `want`: kOk for an entry no test
+    /// of this scene reads, whose answer must then be the clean input's.
+    bool unread_where_read = false;
   };
   const Case cases[] = {
       {"NaN range", Status::kNonFinite, [&](auto& p, auto&) { p.obs.z[2].x() = nan; }},
@@ -39,7 +42,8 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"R not positive definite", Status::kNotPositiveDefinite,
        [&](auto& p, auto&) { p.obs.R[4] << T(0.01), T(0.02), T(0.02), T(0.01); }},
       {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
-      {"C not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 0) += T(0.5); }},
+      // Candidates 2 and 0: no joint test of this scene holds both, so only the full check reads it.
+      {"C not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 0) += T(0.5); }, true},
       {"C block indefinite", Status::kNotPositiveDefinite,
        [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
       {"C wrong size", Status::kInvalidInput,
@@ -58,17 +62,29 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"local radius NaN", Status::kInvalidInput,
        [&](auto&, auto& c) { c.local_region = true; c.local_radius_m = nan; }},
   };
-  for (const Case& c : cases) {
-    CAPTURE(c.name);
-    auto p = std::make_unique<Problem<T, B>>(*base);
-    auto cfg = cfg0;
-    c.corrupt(*p, cfg);
-    // Sentinel output: every byte set, so any write shows.
-    std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
-    Association<T, B> before;
-    std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
-    CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == c.want);
-    CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+  auto clean = std::make_unique<Problem<T, B>>(*base);
+  std::memset(static_cast<void*>(&clean->out), 0x5A, sizeof(clean->out));
+  REQUIRE(associate(clean->obs, clean->pred, cfg0, clean->ws, clean->out) == Status::kOk);
+  for (CovarianceCheck check : {CovarianceCheck::kFull, CovarianceCheck::kWhereRead}) {
+    for (const Case& c : cases) {
+      CAPTURE(c.name);
+      CAPTURE(static_cast<int>(check));
+      auto p = std::make_unique<Problem<T, B>>(*base);
+      auto cfg = cfg0;
+      cfg.covariance_check = check;
+      c.corrupt(*p, cfg);
+      // Sentinel output: every byte set, so any write shows.
+      std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
+      Association<T, B> before;
+      std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
+      if (check == CovarianceCheck::kWhereRead && c.unread_where_read) {
+        CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+        CHECK(std::memcmp(&clean->out, &p->out, sizeof(p->out)) == 0);  // the clean answer
+        continue;
+      }
+      CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == c.want);
+      CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+    }
   }
 }
 
@@ -135,6 +151,8 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   cfg.local_radius_m = T(10);
   p->pred.C(5, 1) = std::numeric_limits<T>::quiet_NaN();  // cross term of candidate 2 (outside)
   p->pred.C(4, 4) = T(-1);                                // its own block, indefinite
+  // The full check (CovarianceCheck::kFull: every block between candidates in the region, up front).
+  cfg.covariance_check = CovarianceCheck::kFull;
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
   CHECK(p->out.feature[0] == 0);
   cfg.local_region = false;  // now every candidate is read
@@ -142,4 +160,133 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   cfg.local_region = true;
   p->pred.C(3, 0) = std::numeric_limits<T>::quiet_NaN();  // cross term between two candidates inside
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
+  // The check where read (the default, issue 13): diagonal blocks in the region at gating, cross
+  // blocks when a joint test reads them. One observation: no joint test holds two candidates, so the
+  // NaN cross term C(3, 0) inside the region is never read and cannot change the answer.
+  cfg.covariance_check = CovarianceCheck::kWhereRead;
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 0);
+  cfg.local_region = false;  // candidate 2's own block is now read by the gate: indefinite
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNotPositiveDefinite);
+  p->pred.C(4, 4) = T(0.01);  // its block fine again: its NaN cross term C(5, 1) is never read
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] == 0);
+  p->pred.C(4, 5) = std::numeric_limits<T>::quiet_NaN();  // inside candidate 2's own block: read
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
+}
+
+// Issue 13: C's cross blocks are checked where a joint (or pairwise) test reads them. A bad entry a
+// test reads gets the same status as the full check's, output untouched; one that no test reads
+// leaves the answer exactly as on the clean input. The full check (CovarianceCheck::kFull) still
+// rejects both.
+TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads them", T, float, double) {
+  using B = DefaultBounds;
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  const T inf = std::numeric_limits<T>::infinity();
+  int read_cases = 0;
+  int unread_cases = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    host::SceneParams sp;
+    sp.observations = 8;
+    sp.landmarks = 14;
+    sp.max_range_m = 8;
+    auto base = scene_problem<T, B>(sp, seed);
+    for (int preset = 0; preset < kStrategyCount; ++preset) {
+      CAPTURE(seed);
+      CAPTURE(preset);
+      StrategyParams<T> params;
+      params.local_radius_m = T(100);  // every candidate in the region
+      params.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed (pairwise tests) on every scene
+      AssociationConfig<T, B> cfg;
+      REQUIRE(make_strategy(static_cast<Strategy>(preset), params, cfg) == Status::kOk);
+      auto clean = std::make_unique<Problem<T, B>>(*base);
+      REQUIRE(associate(clean->obs, clean->pred, cfg, clean->ws, clean->out) == Status::kOk);
+      // Two paired candidates: their cross block is read when the second joins the first.
+      int c1 = -1, c2 = -1;
+      for (int i = 0; i < clean->out.count; ++i) {
+        if (clean->out.candidate[i] < 0) continue;
+        (c1 < 0 ? c1 : c2) = clean->out.candidate[i];
+        if (c2 >= 0) break;
+      }
+      // A candidate no observation is individually compatible with (never in any hypothesis), and
+      // for the pose-free seed and verification not within their wide gate either: never read.
+      int unread = -1;
+      for (int j = 0; j < base->pred.count && unread < 0; ++j) {
+        bool near = false;
+        for (int i = 0; i < base->obs.count; ++i) {
+          const Mat2<T> S = base->pred.C.template block<2, 2>(2 * j, 2 * j) + base->obs.R[i];
+          near = near || mahalanobis2(innovation(base->obs.z[i], base->pred.h[j]), S) <= cfg.consistency.wide_d2;
+        }
+        if (!near) unread = j;
+      }
+      struct Bad {
+        T value;
+        bool mirror_only;  // corrupt one side only (asymmetry) or both (NaN / Inf on both sides)
+        Status want;
+      };
+      const Bad bads[] = {{nan, false, Status::kNonFinite}, {inf, true, Status::kNonFinite},
+                          {T(0.37), true, Status::kNotSymmetric}};
+      for (const Bad& bad : bads) {
+        for (int which = 0; which < 2; ++which) {
+          const int a = which == 0 ? c1 : unread;
+          const int b = which == 0 ? c2 : (unread == 0 ? 1 : 0);
+          if (a < 0 || b < 0 || a == b) continue;
+          for (int entry = 0; entry < 4; ++entry) {
+            auto p = std::make_unique<Problem<T, B>>(*base);
+            const int r = 2 * a + entry / 2, c = 2 * b + entry % 2;
+            p->pred.C(r, c) = bad.mirror_only ? p->pred.C(r, c) + bad.value : bad.value;
+            if (!bad.mirror_only) p->pred.C(c, r) = bad.value;
+            std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
+            Association<T, B> before;
+            std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
+            if (which == 0) {
+              ++read_cases;
+              CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == bad.want);
+              CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+            } else {
+              ++unread_cases;
+              std::memcpy(static_cast<void*>(&p->out), &clean->out, sizeof(p->out));  // same padding
+              p->out.count = -1;
+              REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+              CHECK(std::memcmp(&clean->out, &p->out, sizeof(p->out)) == 0);
+            }
+            auto full = cfg;
+            full.covariance_check = CovarianceCheck::kFull;
+            std::memcpy(static_cast<void*>(&p->out), &before, sizeof(before));
+            CHECK(associate(p->obs, p->pred, full, p->ws, p->out) == bad.want);
+            CHECK(std::memcmp(&before, &p->out, sizeof(before)) == 0);
+          }
+        }
+      }
+    }
+  }
+  CHECK(read_cases > 100);
+  CHECK(unread_cases > 100);
+}
+
+TEST_CASE_TEMPLATE("the full covariance check and the check where read give the same answers", T, float,
+                   double) {
+  using B = DefaultBounds;
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    host::SceneParams sp;
+    sp.observations = 10;
+    sp.landmarks = 20;
+    sp.max_range_m = 8;
+    auto p = scene_problem<T, B>(sp, seed);
+    auto q = std::make_unique<Problem<T, B>>(*p);
+    for (int preset = 0; preset < kStrategyCount; ++preset) {
+      CAPTURE(seed);
+      CAPTURE(preset);
+      StrategyParams<T> params;
+      params.local_radius_m = T(7);
+      AssociationConfig<T, B> lazy, full;
+      REQUIRE(make_strategy(static_cast<Strategy>(preset), params, lazy) == Status::kOk);
+      params.full_covariance_check = true;
+      REQUIRE(make_strategy(static_cast<Strategy>(preset), params, full) == Status::kOk);
+      CHECK(full.covariance_check == CovarianceCheck::kFull);
+      REQUIRE(associate(p->obs, p->pred, lazy, p->ws, p->out) == Status::kOk);
+      REQUIRE(associate(q->obs, q->pred, full, q->ws, q->out) == Status::kOk);
+      CHECK(std::memcmp(&p->out, &q->out, sizeof(p->out)) == 0);
+    }
+  }
 }

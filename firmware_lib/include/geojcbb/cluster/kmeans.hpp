@@ -5,10 +5,9 @@
 #pragma once
 
 #include "geojcbb/cluster/groups.hpp"
+#include "geojcbb/core/grouping_options.hpp"
 
 namespace geojcbb {
-
-constexpr int kMaxKMeansIterations = 50;
 
 struct KMeansStats {
   int iterations = 0;

@@ -10,7 +10,7 @@
 #include <limits>
 
 #include "geojcbb/consistency/max_clique.hpp"
-#include "geojcbb/consistency/options.hpp"
+#include "geojcbb/core/consistency_options.hpp"
 #include "geojcbb/consistency/pairwise.hpp"
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/gate/validate.hpp"

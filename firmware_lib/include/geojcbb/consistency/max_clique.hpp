@@ -9,12 +9,10 @@
 #include <cstdint>
 
 #include "geojcbb/consistency/bitset_graph.hpp"
+#include "geojcbb/core/consistency_options.hpp"
 #include "geojcbb/core/status.hpp"
 
 namespace geojcbb {
-
-/// Compile-time cap on a max-clique search's run-time node budget: the worst case of one call.
-constexpr std::uint32_t kMaxCliqueSearchNodes = 1000000;
 
 /// Caller-owned working memory of max_clique().
 /// @tparam MaxDepth  largest clique the search can hold (its stack depth). A graph whose clique

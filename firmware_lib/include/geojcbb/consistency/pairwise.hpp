@@ -19,7 +19,7 @@
 #include <limits>
 
 #include "geojcbb/consistency/bitset_graph.hpp"
-#include "geojcbb/consistency/options.hpp"
+#include "geojcbb/core/consistency_options.hpp"
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/gate/compatibility.hpp"
@@ -99,11 +99,19 @@ T norm_variance(const Vec2<T>& d, const Mat2<T>& S, T norm) {
 }  // namespace pairwise_detail
 
 /// The distance test of pairings (i, a) and (k, b), a != b. Inputs validated, geometry prepared.
-/// @return kOk; kNotPositiveDefinite when C's blocks of a and b make Sigma_v's variance negative
-///         beyond rounding (C not PSD).
+/// @return kOk; kNonFinite / kNotSymmetric for an entry of C's cross block (a, b) that is not finite
+///         or differs from its mirror image (C validated where it is read, issue 13);
+///         kNotPositiveDefinite when C's blocks of a and b make Sigma_v's variance negative beyond
+///         rounding (C not PSD).
 template <typename T, class B>
 [[nodiscard]] Status pair_statistic(const PairwiseGeometry<T, B>& geo, const Prediction<T, B>& pred, int i,
                                     int a, int k, int b, PairStatistic<T>& out) {
+  for (int r = 0; r < 2; ++r) {
+    for (int c = 0; c < 2; ++c) {
+      const Status s = check_mirrored(pred.C(2 * a + r, 2 * b + c), pred.C(2 * b + c, 2 * a + r));
+      if (s != Status::kOk) return s;
+    }
+  }
   const Vec2<T> u = geo.obs_point[i] - geo.obs_point[k];
   const Mat2<T> Su = geo.obs_cov[i] + geo.obs_cov[k];
   const Vec2<T> v = geo.cand_point[a] - geo.cand_point[b];

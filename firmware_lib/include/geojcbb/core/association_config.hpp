@@ -2,12 +2,10 @@
 // the grouped ones of issue 3) are presets of these switches, not separate code paths.
 #pragma once
 
-#include "geojcbb/cluster/dbscan.hpp"
-#include "geojcbb/cluster/gmm_em.hpp"
-#include "geojcbb/cluster/kmeans.hpp"
-#include "geojcbb/consistency/options.hpp"
 #include "geojcbb/core/capacity.hpp"
-#include "geojcbb/gate/thresholds.hpp"
+#include "geojcbb/core/consistency_options.hpp"
+#include "geojcbb/core/grouping_options.hpp"
+#include "geojcbb/core/gate_thresholds.hpp"
 
 namespace geojcbb {
 
@@ -16,16 +14,20 @@ enum class SearchMethod : std::uint8_t {
   kJcbb,  ///< joint compatibility branch and bound (Neira & Tardos 2001)
 };
 
-/// How the observations are split before JCBB runs per group (ARCHITECTURE.md, step 3b).
-enum class Grouping : std::uint8_t {
-  kNone,    ///< one group: plain JCBB
-  kKMeans,  ///< k-means (KJCBB)
-  kDbscan,  ///< DBSCAN (DFJCBB)
-  kGmmEm,   ///< Gaussian mixture by EM (GEMJCBB, GEOJCBB)
-};
-
 /// Most RJC tries per scan (AssociationConfig::rjc_tries).
 constexpr int kMaxRjcTries = 64;
+
+/// How much of C validate() checks before the stages run (issue 13).
+enum class CovarianceCheck : std::uint8_t {
+  /// Each entry of C is checked where a stage reads it: the diagonal blocks of the candidates in the
+  /// local region before gating, a cross block when a joint (or pairwise) test reads it. A bad entry
+  /// gets the same Status as under kFull (outputs untouched); one that no test reads cannot change
+  /// the answer. O(n) before the stages instead of O(n^2).
+  kWhereRead,
+  /// Every entry between candidates of the local region, before any stage runs (the behaviour before
+  /// issue 13; O(n^2) per call).
+  kFull,
+};
 
 template <typename T, class B>
 struct AssociationConfig {
@@ -99,6 +101,20 @@ struct AssociationConfig {
   /// The re-check's repair search may add up to 2 * MaxObservations more.
   int node_budget = B::kMaxJcbbNodes;
   GateThresholds<T, B::kMaxObservations> gate;  ///< set with GateThresholds::from_confidence
+  CovarianceCheck covariance_check = CovarianceCheck::kWhereRead;  ///< see CovarianceCheck
 };
+
+/// The grouping stage's options of a configuration (cluster/group.hpp reads only these).
+template <typename T, class B>
+GroupingOptions<T> grouping_options(const AssociationConfig<T, B>& cfg) {
+  GroupingOptions<T> o;
+  o.grouping = cfg.grouping;
+  o.groups = cfg.groups;
+  o.kmeans_max_iterations = cfg.kmeans_max_iterations;
+  o.dbscan_eps_m = cfg.dbscan_eps_m;
+  o.dbscan_min_points = cfg.dbscan_min_points;
+  o.em = cfg.em;
+  return o;
+}
 
 }  // namespace geojcbb

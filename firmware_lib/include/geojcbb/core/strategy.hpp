@@ -50,6 +50,12 @@ struct StrategyParams {
   double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
   bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
+  /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
+  /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
+  bool full_covariance_check = false;
+  /// GMM-EM as before issue 13: farthest-first start and the papers' stop rule (objective tolerance
+  /// only); false: the k-means start and the stop once the groups are stable (EmOptions).
+  bool papers_em = false;
   /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
   T seed_min_position_var_m2 = T(4);
   /// The consistency graph's wide gate, chi2inv(0.99999, 2) = -2 ln(1e-5), and its pairwise test,
@@ -85,6 +91,9 @@ template <typename T, class B>
   // temporary would cost the frame as much as a local copy).
   out.kmeans_max_iterations = kMaxKMeansIterations;
   out.em = EmOptions<T>{};
+  out.em.stop = p.papers_em ? EmStop::kObjective : EmStop::kGroupsStable;
+  out.em.start = p.papers_em ? EmStart::kFarthestFirst : EmStart::kKMeans;
+  out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
   out.order_fewest_candidates_first = true;
   out.seed_min_pairings = 3;
   out.rjc = false;

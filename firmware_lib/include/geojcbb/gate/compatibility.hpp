@@ -2,6 +2,10 @@
 // (observation i, candidate j) pair:
 //   nu_ij = z_i - h_j (bearing wrapped),  S_ij = C_jj + R_i,  d2_ij = nu_ij^T S_ij^-1 nu_ij <= chi2(a, 2)
 // Output: per observation, its compatible candidates sorted by d2 (nearest first).
+// Issue 13: a pair is first tested against two lower bounds of its d2 (Cauchy-Schwarz: for S PD,
+// d2 >= nu_r^2 / S_rr and d2 >= nu_b^2 / S_bb), with a factor 2 of margin over rounding; a pair
+// they reject is incompatible without its 2x2 inverse. The nearest d2 of an unpaired observation
+// (Association::d2) is computed when the answer is written, for those observations only.
 // Bounds: MaxObservations x MaxCandidates pairs; insertion sort of at most MaxCandidates entries.
 #pragma once
 
@@ -37,10 +41,31 @@ struct CompatibilityTable {
   /// cand[i][k]: k-th nearest compatible candidate of observation i (k < count[i]).
   std::array<std::array<std::int16_t, B::kMaxCandidates>, B::kMaxObservations> cand;
   std::array<std::array<T, B::kMaxCandidates>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
-  std::array<T, B::kMaxObservations> nearest_d2;  ///< min d2 over the region, compatible or not
-  std::array<T, B::kMaxObservations> nearest_incompatible_d2;  ///< min d2 over the region's others
   std::array<bool, B::kMaxCandidates> in_region;
 };
+
+/// d2 of observation i and candidate j (the individual test's statistic).
+template <typename T, class B>
+T individual_d2(const Observations<T, B>& obs, const Prediction<T, B>& pred, int i, int j) {
+  const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
+  return mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
+}
+
+/// The smallest d2 of observation i over the candidates in the region (`nearest`), and over those
+/// the individual gate rejects (`nearest_incompatible`); infinity when there is none.
+/// Bound: MaxCandidates.
+template <typename T, class B>
+void nearest_d2(const Observations<T, B>& obs, const Prediction<T, B>& pred, const CompatibilityTable<T, B>& table,
+                T gate, int i, T& nearest, T& nearest_incompatible) {
+  nearest = std::numeric_limits<T>::infinity();
+  nearest_incompatible = nearest;
+  for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+    if (!table.in_region[j]) continue;
+    const T d2 = individual_d2(obs, pred, i, j);
+    if (d2 < nearest) nearest = d2;
+    if (!(d2 <= gate) && d2 < nearest_incompatible) nearest_incompatible = d2;
+  }
+}
 
 /// Builds the table. Inputs must already be validated (see validate.hpp).
 template <typename T, class B>
@@ -53,19 +78,20 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
     table.in_region[j] = in_local_region(cfg, pred.h[j]);
     if (table.in_region[j]) ++diag.candidates_in_region;
   }
+  const T gate = cfg.gate.individual;
+  const T bound = T(2) * gate;  // the lower bounds' margin over rounding
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     int n = 0;
-    T nearest = std::numeric_limits<T>::infinity();
-    T nearest_out = nearest;
+    const Mat2<T>& R = obs.R[i];
     for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
       if (!table.in_region[j]) continue;
-      const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
-      const T d2 = mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
-      if (d2 < nearest) nearest = d2;
-      if (!(d2 <= cfg.gate.individual)) {
-        if (d2 < nearest_out) nearest_out = d2;
-        continue;
-      }
+      const Vec2<T> nu = innovation(obs.z[i], pred.h[j]);
+      const T s_rr = pred.C(2 * j, 2 * j) + R(0, 0);
+      const T s_bb = pred.C(2 * j + 1, 2 * j + 1) + R(1, 1);
+      if (nu.x() * nu.x() > bound * s_rr || nu.y() * nu.y() > bound * s_bb) continue;
+      const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + R;
+      const T d2 = mahalanobis2(nu, S);
+      if (!(d2 <= gate)) continue;
       int k = n++;  // insertion sort by d2, ties by candidate index (stable)
       for (; k > 0 && table.d2[i][k - 1] > d2; --k) {  // <= kMaxCandidates
         table.d2[i][k] = table.d2[i][k - 1];
@@ -75,8 +101,6 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
       table.cand[i][k] = static_cast<std::int16_t>(j);
     }
     table.count[i] = static_cast<std::int16_t>(n);
-    table.nearest_d2[i] = nearest;
-    table.nearest_incompatible_d2[i] = nearest_out;
     diag.compatible_pairs = static_cast<std::uint16_t>(diag.compatible_pairs + n);
   }
 }

@@ -1,10 +1,13 @@
 // gate: validation of one association call's inputs and options, before any state is touched.
-// Checks: counts within capacity, C sized 2n x 2n, every value finite, ranges >= 0, |bearing| <= pi,
-// R_i symmetric positive definite, C symmetric with positive semidefinite 2x2 diagonal blocks. C is
-// checked on the candidates inside the local region only (all when the region is off): the call
-// reads nothing else, and the region exists to make a large map cheap.
-// (C's off-diagonal definiteness is checked where it is used: a non-positive Cholesky pivot in the
-// joint test.) Bounds: O(n_region^2) over C, O(m) over observations.
+// Checks: counts within capacity, C sized 2n x 2n, every value the call reads finite, ranges >= 0,
+// |bearing| <= pi, R_i symmetric positive definite, C's 2x2 diagonal blocks symmetric and positive
+// semidefinite. C is checked on the candidates inside the local region only (all when the region is
+// off): the call reads nothing else, and the region exists to make a large map cheap.
+// C's cross blocks (issue 13): with CovarianceCheck::kWhereRead (the default) they are checked where
+// a stage reads them (IncrementalJoint::try_push, pair_statistic), with the same statuses; with
+// kFull, here, every pair of candidates in the region. C's off-diagonal definiteness is checked
+// where it is used: a non-positive Cholesky pivot in the joint test.
+// Bounds: O(n) over h and C's diagonal blocks (kFull: O(n_region^2) over C), O(m) over observations.
 #pragma once
 
 #include "geojcbb/core/association_config.hpp"
@@ -38,6 +41,11 @@ template <typename T, class B>
       cfg.em.max_iterations < 1 || cfg.em.max_iterations > kMaxEmIterations ||
       !(std::isfinite(cfg.em.tolerance) && cfg.em.tolerance >= T(0)) ||
       !(std::isfinite(cfg.em.covariance_floor_m2) && cfg.em.covariance_floor_m2 > T(0)) ||
+      (cfg.em.stop != EmStop::kObjective && cfg.em.stop != EmStop::kGroupsStable) ||
+      (cfg.em.start != EmStart::kFarthestFirst && cfg.em.start != EmStart::kKMeans) ||
+      cfg.em.stable_iterations < 1 || cfg.em.stable_iterations > kMaxEmIterations ||
+      !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(1)) ||
+      (cfg.covariance_check != CovarianceCheck::kWhereRead && cfg.covariance_check != CovarianceCheck::kFull) ||
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
   }
@@ -53,7 +61,8 @@ template <typename T, class B>
   }
   const Status s = validate_observations(obs);
   if (s != Status::kOk) return s;
-  return validate_prediction(pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); });
+  return validate_prediction(pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); },
+                             cfg.covariance_check == CovarianceCheck::kFull);
 }
 
 /// The observations' values (counts are checked by the caller).
@@ -70,18 +79,37 @@ template <typename T, class B>
   return Status::kOk;
 }
 
+/// C's 2x2 diagonal block of candidate j: finite, symmetric, positive semidefinite.
+/// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
+template <typename T, class B>
+[[nodiscard]] Status check_diagonal_block(const Prediction<T, B>& pred, int j) {
+  const Mat2<T> Cjj = pred.C.template block<2, 2>(2 * j, 2 * j);
+  if (!Cjj.allFinite()) return Status::kNonFinite;
+  if (!nearly_equal(Cjj(0, 1), Cjj(1, 0))) return Status::kNotSymmetric;
+  return is_psd(Cjj) ? Status::kOk : Status::kNotPositiveDefinite;
+}
+
 /// The prediction's values (counts and C's size are checked by the caller); C only on the candidates
-/// for which in_region(h) holds.
+/// for which in_region(h) holds: their diagonal blocks, and with `full` every cross block between
+/// two of them (otherwise the stages check a cross block when they read it).
 /// @return kOk; kNonFinite; kInvalidInput for a negative id; kNotSymmetric / kNotPositiveDefinite
 ///         for a bad C.
 template <typename T, class B, class InRegion>
-[[nodiscard]] Status validate_prediction(const Prediction<T, B>& pred, InRegion in_region) {
+[[nodiscard]] Status validate_prediction(const Prediction<T, B>& pred, InRegion in_region, bool full = true) {
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
     if (!pred.h[j].allFinite()) return Status::kNonFinite;
     if (pred.id[j] < 0) return Status::kInvalidInput;
   }
-  // C is checked where the call reads it: the blocks of candidates inside the local region (all
-  // candidates when the region is off), lower triangle against upper.
+  if (!full) {
+    for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
+      if (!in_region(pred.h[j])) continue;
+      const Status s = check_diagonal_block(pred, j);
+      if (s != Status::kOk) return s;
+    }
+    return Status::kOk;
+  }
+  // Every block of candidates inside the local region (all candidates when the region is off),
+  // lower triangle against upper.
   for (int j = 0; j < pred.count; ++j) {  // <= kMaxCandidates
     if (!in_region(pred.h[j])) continue;
     for (int k = j; k < pred.count; ++k) {  // <= kMaxCandidates

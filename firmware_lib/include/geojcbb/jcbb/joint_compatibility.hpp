@@ -4,6 +4,9 @@
 // complement: O(p^2) for p pairings. Removing the last pairing drops its two rows: O(1).
 // Since C_H is PSD and R_i is PD, every new pivot is at least lambda_min(R_i) in exact arithmetic;
 // a non-positive pivot therefore means C is not PSD, and is reported as kNotPositiveDefinite.
+// Issue 13: try_push reads C's cross blocks between the new candidate and the held ones, and (unless
+// told the caller checked all of C) checks each entry it reads against its mirror image (finite,
+// symmetric): C is validated where the joint test reads it.
 #pragma once
 
 #include <array>
@@ -22,6 +25,9 @@ class IncrementalJoint {
   static constexpr int kRows = 2 * MaxPairs;
 
   void clear() { pairs_ = 0; }
+  /// Whether try_push checks the cross entries of C it reads (default) or trusts the caller's check
+  /// of the whole of C (CovarianceCheck::kFull).
+  void check_reads(bool on) { check_reads_ = on; }
   int pairs() const { return pairs_; }
   /// Joint d2 of the pairings held.
   T d2() const { return d2_[pairs_]; }
@@ -32,7 +38,9 @@ class IncrementalJoint {
   /// @param R     the observation's noise
   /// @param nu    the pair's innovation z_i - h_j (bearing wrapped)
   /// @param[out] d2_out  joint d2 with the new pairing
-  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNotPositiveDefinite for a pivot <= 0.
+  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNonFinite / kNotSymmetric for a cross
+  ///         entry of C read here that is not finite or differs from its mirror image (when checking
+  ///         reads); kNotPositiveDefinite for a pivot <= 0. Nothing held changes unless kOk.
   template <class CMatrix>
   [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu,
                                 T& d2_out) {
@@ -41,6 +49,17 @@ class IncrementalJoint {
     T* row0 = &L_[static_cast<std::size_t>(n) * kRows];
     T* row1 = row0 + kRows;
     const int r0 = 2 * cand;
+    if (check_reads_) {
+      for (int p = 0; p < pairs_; ++p) {  // <= MaxPairs: the cross block of each held candidate
+        const int c0 = 2 * cand_[p];
+        for (int a = 0; a < 2; ++a) {
+          for (int b = 0; b < 2; ++b) {
+            const Status s = check_mirrored(C(r0 + a, c0 + b), C(c0 + b, r0 + a));
+            if (s != Status::kOk) return s;
+          }
+        }
+      }
+    }
     // X = B L^-T, B = cross covariance of the new rows with the held ones (R has no cross terms).
     for (int c = 0; c < n; ++c) {  // <= 2 MaxPairs
       const T* lc = &L_[static_cast<std::size_t>(c) * kRows];
@@ -97,6 +116,7 @@ class IncrementalJoint {
   std::array<T, MaxPairs + 1> d2_{};                              // d2_[p]: joint d2 of p pairings
   std::array<std::int16_t, MaxPairs> cand_{};
   int pairs_ = 0;
+  bool check_reads_ = true;
 };
 
 }  // namespace geojcbb

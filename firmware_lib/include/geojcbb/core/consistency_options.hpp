@@ -1,4 +1,4 @@
-// consistency: the options of the pose-free consistency stage as plain data: which pairings become
+// core: the options of the pose-free consistency stage as plain data: which pairings become
 // graph nodes (a wide individual gate, or every candidate in the local region), the pairwise
 // distance gate (chi-square, 1 dof) and the max-clique node budget (<= kMaxCliqueSearchNodes).
 // Reference: Bailey, "Mobile robot localisation and mapping in extensive outdoor environments"
@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <limits>
 
-#include "geojcbb/consistency/max_clique.hpp"
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/status.hpp"
@@ -21,6 +20,9 @@ enum class PairingGate : std::uint8_t {
   kWide,          ///< individual d2 <= wide_d2 (the individual gate at a much higher confidence)
   kEveryCandidate,  ///< every candidate in the local region (all when the region is off): no pose trust
 };
+
+/// Compile-time cap on a max-clique search's run-time node budget: the worst case of one call.
+constexpr std::uint32_t kMaxCliqueSearchNodes = 1000000;
 
 /// Default search nodes of one consistency call (docs/consistency.md: random 64-node graphs need far
 /// fewer; consistency graphs are sparse outside their true clique).

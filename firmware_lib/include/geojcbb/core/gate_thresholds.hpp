@@ -1,4 +1,4 @@
-// gate: chi-square thresholds of the individual test (2 dof) and of the joint test (2p dof for p
+// core: chi-square thresholds of the individual test (2 dof) and of the joint test (2p dof for p
 // pairings), computed once per configuration, or given raw by the caller.
 #pragma once
 
