@@ -102,11 +102,12 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
       sum += m;
       inside += b && m >= l / runs && m <= h / runs;
     }
-    row.anees = sum / nees_sum.size();
-    row.nees_inside = double(inside) / nees_sum.size();
+    const double steps = static_cast<double>(nees_sum.size());
+    row.anees = sum / steps;
+    row.nees_inside = double(inside) / steps;
     const long dof = 3L * runs * static_cast<long>(nees_sum.size());
-    row.anees_lo = chi2_quantile_wh(0.025, dof) / (double(runs) * nees_sum.size());
-    row.anees_hi = chi2_quantile_wh(0.975, dof) / (double(runs) * nees_sum.size());
+    row.anees_lo = chi2_quantile_wh(0.025, dof) / (double(runs) * steps);
+    row.anees_hi = chi2_quantile_wh(0.975, dof) / (double(runs) * steps);
   }
   return row;
 }

@@ -69,7 +69,7 @@ TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle 
   const double eps = std::numeric_limits<T>::epsilon();
   int compared = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(consistency_scene_params(10, 16, 0.5 * seed, 0.05 * seed), seed);
+    const host::Scene s = host::make_scene(consistency_scene_params(10, 16, 0.5 * static_cast<double>(seed), 0.05 * static_cast<double>(seed)), seed);
     auto in = load<T>(s);
     for (int i = 0; i < in->obs.count; ++i) {
       for (int k = i + 1; k < in->obs.count; ++k) {

@@ -78,7 +78,7 @@ TEST_CASE_TEMPLATE("JCBB equals the exhaustive oracle: max pairings, joint test,
         CHECK(p->out.pairings == rs.max_pairings);
         if (optimal) {
           CHECK(static_cast<long double>(p->out.joint_d2) ==
-                doctest::Approx(static_cast<double>(rs.min_d2)).epsilon(kMargin<T> * 10).scale(1e-6));
+                doctest::Approx(static_cast<double>(rs.min_d2)).epsilon(static_cast<double>(kMargin<T> * 10)).scale(1e-6));
         }
       } else {
         ++borderline;

@@ -46,6 +46,10 @@ struct EmWorkspace {
   T ll = T(0);  ///< LL (eq. 10) at the last E-step
   std::array<std::int8_t, B::kMaxObservations> label;  ///< arg max gamma at the last E-step
   bool hard = false;  ///< at the last E-step every point's largest gamma was >= 1 - hard_margin
+  // E-step scratch, here rather than in e_step's frame: on the Cortex-M4F the chain associate ->
+  // group -> gmm_em -> e_step was 1080 B with them on the stack (the call-chain limit is 1024 B).
+  std::array<T, K> e_log_norm;
+  std::array<Mat2<T>, K> e_inv;
 };
 
 namespace em_detail {
@@ -57,8 +61,8 @@ template <typename T> constexpr T kMinComponentWeight = T(1e-3);
 /// Bound: m * k.
 template <typename T, class B>
 int e_step(const Points<T, B>& pts, int m, T floor, T hard_margin, EmWorkspace<T, B>& ws, T& q_out) {
-  std::array<T, B::kMaxGroups> log_norm;
-  std::array<Mat2<T>, B::kMaxGroups> inv;
+  std::array<T, B::kMaxGroups>& log_norm = ws.e_log_norm;
+  std::array<Mat2<T>, B::kMaxGroups>& inv = ws.e_inv;
   T penalty = T(0);
   for (int q = 0; q < ws.k; ++q) {  // <= kMaxGroups
     const Mat2<T>& S = ws.sigma[q];
