@@ -55,7 +55,7 @@ TEST_CASE("node: a session fed as bytes allocates nothing and answers every requ
     b.batch_id = static_cast<std::uint32_t>(k);
     b.count = 3;
     for (int i = 0; i < 3; ++i) {
-      b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * k, -0.6f + 0.6f * i, 0.01f, 0.0f, 3e-4f};
+      b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
     }
     append(in, b, seq++);
   }
@@ -223,7 +223,7 @@ proto::ObsBatchT<24> test_batch(int k) {
   b.batch_id = static_cast<std::uint32_t>(100 + k);
   b.count = 3;
   for (int i = 0; i < 3; ++i) {
-    b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * k, -0.6f + 0.6f * i, 0.01f, 0.0f, 3e-4f};
+    b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
   }
   return b;
 }
@@ -272,7 +272,7 @@ struct Harness {
 }  // namespace
 
 TEST_CASE("node: periodic STATS after the POSE of every N-th scan since CONFIG or RESET") {
-  for (const std::uint16_t period : {0, 1, 3, 7}) {
+  for (const std::uint16_t period : {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{3}, std::uint16_t{7}}) {
     CAPTURE(period);
     Harness h;
     h.open(period);

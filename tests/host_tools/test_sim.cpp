@@ -81,11 +81,12 @@ TEST_CASE("odometry noise, sensor limits and clutter follow the scenario") {
       CHECK(std::abs(o.z.x() - z.x()) < 6 * s.sigma_range_m);
     }
   }
-  const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
-  CHECK(std::abs(mean) < 4 * s.sigma_v_mps / std::sqrt(double(n)));
+  const double nd = static_cast<double>(n);
+  const double mean = sum / nd, sd = std::sqrt(sum2 / nd - mean * mean);
+  CHECK(std::abs(mean) < 4 * s.sigma_v_mps / std::sqrt(nd));
   CHECK(sd == doctest::Approx(s.sigma_v_mps).epsilon(0.05));
-  const double rate = double(clutter) / scans;
-  CHECK(std::abs(rate - 2.0) < 4 * std::sqrt(2.0 / scans));
+  const double rate = double(clutter) / static_cast<double>(scans);
+  CHECK(std::abs(rate - 2.0) < 4 * std::sqrt(2.0 / static_cast<double>(scans)));
 }
 
 TEST_CASE("a bad scenario file is reported with its path") {
