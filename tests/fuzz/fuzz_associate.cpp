@@ -17,6 +17,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "fuzz_bytes.hpp"
 #include "geojcbb/associate.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
@@ -26,24 +27,11 @@ namespace {
 using namespace geojcbb;
 using FB = Bounds<6, 8, 3, 300, 10>;  // small, so capacities are reached
 
-void require(bool ok) {
-  if (!ok) __builtin_trap();
-}
+using fuzz::require;
 
-struct Input {
-  const std::uint8_t* p;
-  std::size_t n, i = 0;
-  bool more() const { return i < n; }
-  std::uint8_t u8() { return i < n ? p[i++] : 0; }
-  std::uint16_t u16() {  // one read per statement: the same order under every compiler
-    const std::uint8_t lo = u8();
-    return static_cast<std::uint16_t>(lo | (u8() << 8));
-  }
-  std::uint64_t u64() {
-    std::uint64_t v = 0;
-    for (int k = 0; k < 8; ++k) v |= std::uint64_t{u8()} << (8 * k);
-    return v;
-  }
+/// The fuzzer's bytes (fuzz_bytes.hpp) and this target's numbers from them.
+struct Input : fuzz::Bytes {
+  using Bytes::Bytes;
   /// Mostly near `nominal`; sometimes NaN, Inf, huge, tiny, denormal, raw bits.
   template <typename T>
   T f(T nominal) {
@@ -360,7 +348,7 @@ void run(Input& in) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 2048) return 0;
-  Input in{data, size};
+  Input in(data, size);
   if (in.u8() & 1) {
     run<double>(in);
   } else {

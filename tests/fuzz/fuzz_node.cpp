@@ -18,6 +18,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "fuzz_bytes.hpp"
 #include "geojcbb/node/node.hpp"
 #include "geojcbb/protocol/protocol.hpp"
 
@@ -28,24 +29,11 @@ using NB = SmallControllerBounds;
 using Node = node::Node<float, NB>;
 constexpr int kMaxObs = NB::kMaxObservations;
 
-void require(bool ok) {
-  if (!ok) __builtin_trap();
-}
+using fuzz::require;
 
-/// Reads the fuzzer's bytes; past the end it yields zeros (so every program terminates).
-struct Input {
-  const std::uint8_t* p;
-  std::size_t n, i = 0;
-  bool more() const { return i < n; }
-  std::uint8_t u8() { return i < n ? p[i++] : 0; }
-  std::uint16_t u16() {  // one read per statement: the same order under every compiler
-    const std::uint8_t lo = u8();
-    return static_cast<std::uint16_t>(lo | (u8() << 8));
-  }
-  std::uint32_t u32() {
-    const std::uint32_t lo = u16();
-    return lo | (std::uint32_t{u16()} << 16);
-  }
+/// The fuzzer's bytes (fuzz_bytes.hpp) and this target's numbers from them.
+struct Input : fuzz::Bytes {
+  using Bytes::Bytes;
   /// Mostly `nominal`, sometimes scaled, sometimes an edge value (NaN, Inf, huge, tiny, denormal).
   float f(float nominal) {
     const std::uint8_t s = u8();
@@ -372,7 +360,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                              [](void* c, std::uint8_t) { ++static_cast<Sink*>(c)->shutdowns; }},
                 0xB007);
   Session s(*g_node, *g_sink);
-  Input in{data, size};
+  Input in(data, size);
   std::uint32_t batch_id = 0;
   for (int ops = 0; in.more() && ops < 256; ++ops) {  // <= 256 ops
     const std::uint8_t op = in.u8();
