@@ -36,23 +36,23 @@ extern "C" {
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */
-#define GEOJCBB_ALIGNED_STORAGE(name, size)                                              \
-  union {                                                                               \
-    unsigned char bytes[size];                                                          \
-    long double align_ld;                                                               \
-    double align_d;                                                                     \
-    uint64_t align_u64;                                                                 \
+#define GEOJCBB_ALIGNED_STORAGE(name, size) \
+  union {                                   \
+    unsigned char bytes[size];              \
+    long double align_ld;                   \
+    double align_d;                         \
+    uint64_t align_u64;                     \
   } name __attribute__((aligned(GEOJCBB_STORAGE_ALIGN)))
 
 /* Mirrors geojcbb::Status (core/status.hpp), value for value. */
 typedef enum geojcbb_status {
   GEOJCBB_OK = 0,
-  GEOJCBB_NON_FINITE = 1,             /* a NaN or Inf in an input */
-  GEOJCBB_INVALID_INPUT = 2,          /* a value outside its domain, a bad count or option, bad storage */
-  GEOJCBB_CAPACITY_EXCEEDED = 3,      /* a count over a capacity above */
-  GEOJCBB_NOT_SYMMETRIC = 4,          /* a covariance that is not symmetric */
-  GEOJCBB_NOT_POSITIVE_DEFINITE = 5,  /* a covariance that is not positive (semi)definite */
-  GEOJCBB_NO_CONVERGENCE = 6          /* an iterative solver ran out of its iteration bound */
+  GEOJCBB_NON_FINITE = 1,            /* a NaN or Inf in an input */
+  GEOJCBB_INVALID_INPUT = 2,         /* a value outside its domain, a bad count or option, bad storage */
+  GEOJCBB_CAPACITY_EXCEEDED = 3,     /* a count over a capacity above */
+  GEOJCBB_NOT_SYMMETRIC = 4,         /* a covariance that is not symmetric */
+  GEOJCBB_NOT_POSITIVE_DEFINITE = 5, /* a covariance that is not positive (semi)definite */
+  GEOJCBB_NO_CONVERGENCE = 6         /* an iterative solver ran out of its iteration bound */
 } geojcbb_status;
 
 /* Short stable name of a status ("ok", "non-finite", ...). */
@@ -71,17 +71,17 @@ typedef enum geojcbb_strategy {
 
 /* Mirrors geojcbb::StrategyParams<float>; geojcbb_strategy_params_default() fills the defaults. */
 typedef struct geojcbb_strategy_params {
-  double confidence;             /* chi-square level of the individual and joint tests (0.99) */
-  float local_radius_m;          /* r + d [m] (eq. 5); > 0 for GEMJCBB and GEOJCBB */
-  int groups;                    /* K for k-means and GMM-EM (3); 0: BIC (EM) */
-  float dbscan_eps_m;            /* DBSCAN radius [m] (1.5) */
-  int dbscan_min_points;         /* (2) */
-  int joint_recheck;             /* bool (1) */
-  int condition_groups;          /* bool (0) */
-  int node_budget;               /* 0: GEOJCBB_MAX_JCBB_NODES */
-  double ambiguity_margin;       /* 0: off */
-  int new_if_candidates_taken;   /* bool (0) */
-  int verify;                    /* bool (0): pairwise verification in any preset (PCJCBB: always) */
+  double confidence;           /* chi-square level of the individual and joint tests (0.99) */
+  float local_radius_m;        /* r + d [m] (eq. 5); > 0 for GEMJCBB and GEOJCBB */
+  int groups;                  /* K for k-means and GMM-EM (3); 0: BIC (EM) */
+  float dbscan_eps_m;          /* DBSCAN radius [m] (1.5) */
+  int dbscan_min_points;       /* (2) */
+  int joint_recheck;           /* bool (1) */
+  int condition_groups;        /* bool (0) */
+  uint32_t node_budget;        /* 0: GEOJCBB_MAX_JCBB_NODES */
+  double ambiguity_margin;     /* 0: off */
+  int new_if_candidates_taken; /* bool (0) */
+  int verify;                  /* bool (0): pairwise verification in any preset (PCJCBB: always) */
 } geojcbb_strategy_params;
 
 void geojcbb_strategy_params_default(geojcbb_strategy_params* p);
@@ -91,25 +91,25 @@ typedef struct geojcbb_diagnostics {
   uint32_t jcbb_nodes;
   uint16_t candidates_in_region;
   uint16_t compatible_pairs;
-  uint8_t node_budget_hit;     /* bool */
+  uint8_t node_budget_hit; /* bool */
   uint8_t groups;
   uint16_t cluster_iterations;
-  uint8_t cluster_bound_hit;   /* bool */
+  uint8_t cluster_bound_hit; /* bool */
   uint16_t merge_conflicts;
-  uint8_t recheck_failed;      /* bool */
+  uint8_t recheck_failed; /* bool */
   uint16_t recheck_dropped;
   uint16_t declined;
 } geojcbb_diagnostics;
 
 /* Mirrors geojcbb::Association<float, DefaultBounds>. */
 typedef struct geojcbb_association {
-  int count;                                    /* = number of observations */
-  int32_t feature[GEOJCBB_MAX_OBSERVATIONS];    /* feature id, GEOJCBB_NEW_FEATURE or GEOJCBB_UNMATCHED */
-  int16_t candidate[GEOJCBB_MAX_OBSERVATIONS];  /* index of the paired candidate, or -1 */
-  float d2[GEOJCBB_MAX_OBSERVATIONS];           /* individual d2 (unpaired: the nearest, or +inf) */
+  int count;                                   /* = number of observations */
+  int32_t feature[GEOJCBB_MAX_OBSERVATIONS];   /* feature id, GEOJCBB_NEW_FEATURE or GEOJCBB_UNMATCHED */
+  int16_t candidate[GEOJCBB_MAX_OBSERVATIONS]; /* index of the paired candidate, or -1 */
+  float d2[GEOJCBB_MAX_OBSERVATIONS];          /* individual d2 (unpaired: the nearest, or +inf) */
   int pairings;
-  float joint_d2;                               /* joint Mahalanobis distance of the hypothesis */
-  int jointly_compatible;                       /* bool */
+  float joint_d2;         /* joint Mahalanobis distance of the hypothesis */
+  int jointly_compatible; /* bool */
   geojcbb_diagnostics diag;
 } geojcbb_association;
 
@@ -129,23 +129,22 @@ geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strat
  * @return OK; CAPACITY_EXCEEDED for m or n over capacity; the statuses of associate() (its
  * validation, NOT_POSITIVE_DEFINITE). *out is written only on OK. */
 geojcbb_status geojcbb_associate(geojcbb_associator* a, int m, const float* z, const float* R, int n,
-                                 const int32_t* ids, const float* h, const float* C,
-                                 geojcbb_association* out);
+                                 const int32_t* ids, const float* h, const float* C, geojcbb_association* out);
 
 /* ---- EKF-SLAM step (geojcbb::node::SlamStep<float, DefaultBounds>) ---- */
 typedef struct geojcbb_slam geojcbb_slam; /* opaque: lives in the caller's storage */
 
 /* Mirrors node::StepSettings<float>; geojcbb_slam_settings_default() fills the defaults. */
 typedef struct geojcbb_slam_settings {
-  geojcbb_strategy strategy;        /* (GEOJCBB) */
-  geojcbb_strategy_params params;   /* params.local_radius_m must be > 0 */
-  double new_landmark_level;        /* chi-square level of the augmentation gate (0.999) */
-  float min_range_m, max_range_m;   /* where a mapped landmark is expected to be seen */
+  geojcbb_strategy strategy;      /* (GEOJCBB) */
+  geojcbb_strategy_params params; /* params.local_radius_m must be > 0 */
+  double new_landmark_level;      /* chi-square level of the augmentation gate (0.999) */
+  float min_range_m, max_range_m; /* where a mapped landmark is expected to be seen */
   float half_fov_rad;
-  int confirm_hits, max_misses, max_tentative_reviews;  /* landmark life cycle (ekf::LandmarkPolicy) */
+  int confirm_hits, max_misses, max_tentative_reviews; /* landmark life cycle (ekf::LandmarkPolicy) */
   float miss_probability, static_gate_d2;
-  int first_estimates_jacobians;    /* bool (1) */
-  int augment;                      /* bool (1): add new landmarks */
+  int first_estimates_jacobians; /* bool (1) */
+  int augment;                   /* bool (1): add new landmarks */
 } geojcbb_slam_settings;
 
 void geojcbb_slam_settings_default(geojcbb_slam_settings* s);
@@ -161,8 +160,8 @@ typedef enum geojcbb_outcome {
 
 typedef struct geojcbb_step_result {
   int count;
-  uint8_t outcome[GEOJCBB_MAX_OBSERVATIONS];   /* geojcbb_outcome */
-  int32_t feature[GEOJCBB_MAX_OBSERVATIONS];   /* landmark id, -1 when none */
+  uint8_t outcome[GEOJCBB_MAX_OBSERVATIONS]; /* geojcbb_outcome */
+  int32_t feature[GEOJCBB_MAX_OBSERVATIONS]; /* landmark id, -1 when none */
   float d2[GEOJCBB_MAX_OBSERVATIONS];
   geojcbb_diagnostics diag;
 } geojcbb_step_result;

@@ -54,7 +54,7 @@ struct Associator {
   AssociationConfigF cfg;
   ObservationsF obs;
   PredictionF pred;
-  WorkspaceF ws;
+  AssociationWorkspaceF ws;
   AssociationF out;
 };
 

@@ -3,7 +3,7 @@
 namespace geojcbb {
 
 Status associate_f32(const ObservationsF& obs, const PredictionF& pred, const AssociationConfigF& cfg,
-                     WorkspaceF& ws, AssociationF& out) {
+                     AssociationWorkspaceF& ws, AssociationF& out) {
   return associate(obs, pred, cfg, ws, out);
 }
 

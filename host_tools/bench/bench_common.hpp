@@ -17,18 +17,18 @@ namespace geojcbb::bench {
 using Clock = std::chrono::steady_clock;
 
 struct BenchOptions {
-  int scenes = 40;                 ///< scenes per cell
-  std::uint64_t seed = 1;          ///< scene k of a cell uses seed + k
-  bool quick = false;              ///< a smoke run: the smallest cells only
-  double confidence = 0.99;        ///< chi-square level of the individual and joint tests
-  std::string out_dir;             ///< CSV files go here when set
+  int scenes = 40;           ///< scenes per cell
+  std::uint64_t seed = 1;    ///< scene k of a cell uses seed + k
+  bool quick = false;        ///< a smoke run: the smallest cells only
+  double confidence = 0.99;  ///< chi-square level of the individual and joint tests
+  std::string out_dir;       ///< CSV files go here when set
   // mrpt suite
   bool mrpt_kdtree = true;
   double mrpt_cell_cap_s = 20.0;
   std::vector<int> dense_m{6, 8, 10};
   bool dense_only = false;
   // strategies suite
-  int node_budget = 0;             ///< 0: the capacity's maximum
+  NodeCount node_budget = 0;  ///< 0: the capacity's maximum
 };
 
 /// Order statistic by nearest rank: q = 0.5 median, 0.9 p90, 1 maximum.

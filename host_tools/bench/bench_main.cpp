@@ -19,7 +19,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.5, 0.9999));
   app.add_flag("--quick", o.quick, "only the smallest cells (a smoke run)");
   app.add_option("--out-dir", o.out_dir, "write mrpt.csv and strategies.csv here");
-  app.add_option("--mrpt-kdtree", o.mrpt_kdtree, "MRPT's kd-tree prefilter of individual compatibility (its default: on)");
+  app.add_option("--mrpt-kdtree", o.mrpt_kdtree,
+                 "MRPT's kd-tree prefilter of individual compatibility (its default: on)");
   app.add_option("--mrpt-cell-cap-s", o.mrpt_cell_cap_s,
                  "stop calling MRPT-JCBB in a cell once its calls there have taken this many seconds");
   app.add_option("--dense-m", o.dense_m, "observations per scan in the mrpt suite's dense-map cells");

@@ -43,7 +43,7 @@ struct Stats {
 struct Ours {
   Observations<double, B> obs;
   Prediction<double, B> pred;
-  Workspace<double, B> ws;
+  AssociationWorkspace<double, B> ws;
   Association<double, B> out;
   AssociationConfig<double, B> icnn, jcbb;
 };
@@ -85,31 +85,34 @@ int run_mrpt_suite(const BenchOptions& o) {
 
   auto ours = std::make_unique<Ours>();
   for (auto* c : {&ours->icnn, &ours->jcbb}) {
-    if (GateThresholds<double, B::kMaxObservations>::from_confidence(confidence, confidence, c->gate) !=
-        Status::kOk) {
+    if (GateThresholds<double, B::kMaxObservations>::from_confidence(confidence, confidence, c->gate) != Status::kOk) {
       std::fprintf(stderr, "bad confidence\n");
       return 2;
     }
-    c->mutual_exclusion = true;  // as MRPT does
-    c->optimal_criterion = true; // MRPT ranks equal-size leaves by joint distance
+    c->mutual_exclusion = true;   // as MRPT does
+    c->optimal_criterion = true;  // MRPT ranks equal-size leaves by joint distance
   }
   ours->icnn.search = SearchMethod::kIcnn;
   ours->jcbb.search = SearchMethod::kJcbb;
   IncrementalJoint<double, B::kMaxObservations> joint;
 
   std::printf("# Side by side with MRPT\n\n");
-  std::printf("scenes per cell: %d, seed %llu, chi2 level %.4g, 20%% clutter, one R for all observations, "
-              "bearings within +-%.0f deg (no innovation wraps, so MRPT's unwrapped innovations are exact)\n",
-              scenes, static_cast<unsigned long long>(seed), confidence, 2.6 * 180 / kPi<double>);
-  std::printf("our ICNN and JCBB: double, mutual exclusion and optimal criterion on, fewest-candidates-first "
-              "ordering, node budget %d\n", B::kMaxJcbbNodes);
+  std::printf(
+      "scenes per cell: %d, seed %llu, chi2 level %.4g, 20%% clutter, one R for all observations, "
+      "bearings within +-%.0f deg (no innovation wraps, so MRPT's unwrapped innovations are exact)\n",
+      scenes, static_cast<unsigned long long>(seed), confidence, 2.6 * 180 / kPi<double>);
+  std::printf(
+      "our ICNN and JCBB: double, mutual exclusion and optimal criterion on, fewest-candidates-first "
+      "ordering, node budget %d\n",
+      B::kMaxJcbbNodes);
 #if GEOJCBB_WITH_MRPT
   std::printf("MRPT %s: data_association_full_covariance, metricMaha, S = C + blockdiag(R), kd-tree prefilter %s\n",
               "(libmrpt-slam 2.5)", kdtree ? "ON (its default)" : "OFF");
 #else
   std::printf("MRPT: not built (configure with -DGEOJCBB_WITH_MRPT=ON, preset 'bench')\n");
 #endif
-  std::printf("\n| set | M | N | method | median us | p90 us | max us | nodes med/max | precision | recall | fail joint |\n");
+  std::printf(
+      "\n| set | M | N | method | median us | p90 us | max us | nodes med/max | precision | recall | fail joint |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::ofstream csvf;
   if (!csv.empty()) {
@@ -168,9 +171,9 @@ int run_mrpt_suite(const BenchOptions& o) {
 #if GEOJCBB_WITH_MRPT
           if (method == kMrptJcbb && mrpt_jcbb_total_s > mrpt_cell_cap_s) continue;
           mrpt::slam::TDataAssociationResults res;
-          mrpt::slam::data_association_full_covariance(
-              Z, Y, YC, res, method == kMrptNn ? mrpt::slam::assocNN : mrpt::slam::assocJCBB,
-              mrpt::slam::metricMaha, confidence, kdtree);
+          mrpt::slam::data_association_full_covariance(Z, Y, YC, res,
+                                                       method == kMrptNn ? mrpt::slam::assocNN : mrpt::slam::assocJCBB,
+                                                       mrpt::slam::metricMaha, confidence, kdtree);
           const auto t1 = Clock::now();
           const double us = elapsed_us(t0, t1);
           st[method].us.push_back(us);
@@ -201,14 +204,14 @@ int run_mrpt_suite(const BenchOptions& o) {
       if (!s.available || s.calls == 0) continue;
       const double med = quantile(s.us, 0.5), p90 = quantile(s.us, 0.9), mx = quantile(s.us, 1.0);
       const double share = double(s.fail_joint) / s.calls;
-      std::printf("| %s | %d | %d | %s%s | %.1f | %.1f | %.1f | %.0f/%.0f | %.3f | %.3f | %.2f |\n",
-                  cell.set.c_str(), cell.m, cell.n, kNames[method],
+      std::printf("| %s | %d | %d | %s%s | %.1f | %.1f | %.1f | %.0f/%.0f | %.3f | %.3f | %.2f |\n", cell.set.c_str(),
+                  cell.m, cell.n, kNames[method],
                   s.calls < scenes ? (" (" + std::to_string(s.calls) + " scenes)").c_str() : "", med, p90, mx,
                   quantile(s.nodes, 0.5), quantile(s.nodes, 1.0), s.score.precision(), s.score.recall(), share);
       if (csvf) {
-        csvf << cell.set << ',' << cell.m << ',' << cell.n << ',' << kNames[method] << ',' << s.calls << ','
-             << med << ',' << p90 << ',' << mx << ',' << quantile(s.nodes, 0.5) << ',' << quantile(s.nodes, 1.0)
-             << ',' << s.score.precision() << ',' << s.score.recall() << ',' << share << '\n';
+        csvf << cell.set << ',' << cell.m << ',' << cell.n << ',' << kNames[method] << ',' << s.calls << ',' << med
+             << ',' << p90 << ',' << mx << ',' << quantile(s.nodes, 0.5) << ',' << quantile(s.nodes, 1.0) << ','
+             << s.score.precision() << ',' << s.score.recall() << ',' << share << '\n';
       }
     }
     if (cell.set == "standard" && cell.m == 20 && cell.n == 50 && st[kMrptJcbb].calls > 0) {

@@ -34,9 +34,7 @@ ObsBatch make_batch(std::uint32_t id, int count) {
   return b;
 }
 
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 
@@ -123,12 +121,13 @@ int main(int argc, char** argv) {
   if (encode_message(one, 1, 0, ef) != Error::kOk) return 1;
   const std::size_t pl = one.payload_size();
 
-  std::printf("protocol_bench: %d frames x %d passes, %d observations per OBS_BATCH (checksum %08x)\n", frames,
-              repeat, obs, static_cast<unsigned>(sink));
-  std::printf("frame overhead: payload %zu B, wire %zu B (header 8 + CRC 4 + COBS %zu + delimiter 1) = +%zu B, "
-              "%.1f %% efficiency; worst case %zu B\n",
-              pl, ef.size, ef.size - pl - 13, ef.size - pl, 100.0 * static_cast<double>(pl) / static_cast<double>(ef.size),
-              max_wire_size(pl));
+  std::printf("protocol_bench: %d frames x %d passes, %d observations per OBS_BATCH (checksum %08x)\n", frames, repeat,
+              obs, static_cast<unsigned>(sink));
+  std::printf(
+      "frame overhead: payload %zu B, wire %zu B (header 8 + CRC 4 + COBS %zu + delimiter 1) = +%zu B, "
+      "%.1f %% efficiency; worst case %zu B\n",
+      pl, ef.size, ef.size - pl - 13, ef.size - pl, 100.0 * static_cast<double>(pl) / static_cast<double>(ef.size),
+      max_wire_size(pl));
   std::printf("stream: %zu wire bytes for %zu payload bytes\n", stream.size(), payload_bytes);
   std::printf("%-34s %10.1f MB/s  (1.00x)\n", "baseline CRC-32C", wire_mb / t_crc);
   std::printf("%-34s %10.1f MB/s  (%.2fx of CRC)  %llu/%llu frames\n", "decoder push() + ObsBatch decode",
@@ -137,8 +136,7 @@ int main(int argc, char** argv) {
   std::printf("%-34s %10.1f MB/s  (%.2fx of CRC)  %llu/%llu frames\n", "decoder push() only", wire_mb / t_frame,
               t_crc / t_frame, static_cast<unsigned long long>(framed), static_cast<unsigned long long>(expected));
   std::printf("%-34s %10.1f MB/s  (%.2fx of CRC)  %.0f frames/s\n", "encoder encode_message()",
-              static_cast<double>(wire_out) / 1e6 / t_enc, t_crc / t_enc,
-              static_cast<double>(expected) / t_enc);
+              static_cast<double>(wire_out) / 1e6 / t_enc, t_crc / t_enc, static_cast<double>(expected) / t_enc);
   const DecoderCounters& c = dec.counters();
   if (decoded != expected || framed != expected || c.bad_crc + c.bad_length + c.overrun != 0) {
     std::fprintf(stderr, "protocol_bench: frames lost\n");

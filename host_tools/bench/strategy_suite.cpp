@@ -39,7 +39,7 @@ struct MapSet {
 struct Problem {
   Observations<double, SB> obs;
   Prediction<double, SB> pred;
-  Workspace<double, SB> ws;
+  AssociationWorkspace<double, SB> ws;
   Association<double, SB> out;
 };
 
@@ -88,17 +88,19 @@ int run_strategy_suite(const BenchOptions& o) {
 
   const MapSet sets[] = {{"sparse", 120, 20, 0.2, 0.02}, {"medium", 180, 16, 0.3, 0.03}, {"dense", 500, 18, 0.4, 0.04}};
   std::printf("# The six strategies\n\n");
-  std::printf("scenes per cell: %d, seed %llu, chi2 level %.4g; map of N landmarks within R of the robot, "
-              "sensor range %.0f m (field of view +-149 deg), local region r + d = %.0f m; 20%% clutter; "
-              "K = %d groups (k-means, GMM-EM), DBSCAN eps %.1f m / min points %d; node budget %d per scan; "
-              "double\n",
-              o.scenes, static_cast<unsigned long long>(o.seed), o.confidence, kSensorRange,
-              kSensorRange + kCompensation, sp.groups, sp.dbscan_eps_m, sp.dbscan_min_points,
-              variants[kJcbb].cfg.node_budget);
+  std::printf(
+      "scenes per cell: %d, seed %llu, chi2 level %.4g; map of N landmarks within R of the robot, "
+      "sensor range %.0f m (field of view +-149 deg), local region r + d = %.0f m; 20%% clutter; "
+      "K = %d groups (k-means, GMM-EM), DBSCAN eps %.1f m / min points %d; node budget %d per scan; "
+      "double\n",
+      o.scenes, static_cast<unsigned long long>(o.seed), o.confidence, kSensorRange, kSensorRange + kCompensation,
+      sp.groups, sp.dbscan_eps_m, sp.dbscan_min_points, variants[kJcbb].cfg.node_budget);
   std::printf("speed-up and dF1 are against plain JCBB on the same scenes in the same run\n\n");
-  std::printf("maps: sparse N = 120 within R = 20 m, medium 180 within 16 m, dense 500 within 18 m; pose error "
-              "sigma 0.2 / 0.3 / 0.4 m and 0.02 / 0.03 / 0.04 rad\n\n");
-  std::printf("| map | M | strategy | median us | p90 us | p99 us | max us | speed-up | nodes med/max | budget hits | cluster it. med/max | cluster bound hits | precision | recall | F1 | dF1 | fail joint |\n");
+  std::printf(
+      "maps: sparse N = 120 within R = 20 m, medium 180 within 16 m, dense 500 within 18 m; pose error "
+      "sigma 0.2 / 0.3 / 0.4 m and 0.02 / 0.03 / 0.04 rad\n\n");
+  std::printf(
+      "| map | M | strategy | median us | p90 us | p99 us | max us | speed-up | nodes med/max | budget hits | cluster it. med/max | cluster bound hits | precision | recall | F1 | dF1 | fail joint |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::ofstream csv;
   if (!o.out_dir.empty()) {
@@ -156,10 +158,11 @@ int run_strategy_suite(const BenchOptions& o) {
                      mx = quantile(r.us, 1.0);
         const double speedup = jcbb_med / med, df1 = r.score.f1() - jcbb_f1;
         const double fail = double(r.fail_joint) / r.calls;
-        std::printf("| %s | %d | %s | %.1f | %.1f | %.1f | %.1f | %.2fx | %.0f/%.0f | %d | %.0f/%.0f | %d | %.4f | %.4f | %.4f | %+.4f | %.2f |\n",
-                    set.name, m, variants[v].name.c_str(), med, p90, p99, mx, speedup, quantile(r.nodes, 0.5),
-                    quantile(r.nodes, 1.0), r.budget_hits, quantile(r.cluster_it, 0.5), quantile(r.cluster_it, 1.0),
-                    r.cluster_bound_hits, r.score.precision(), r.score.recall(), r.score.f1(), df1, fail);
+        std::printf(
+            "| %s | %d | %s | %.1f | %.1f | %.1f | %.1f | %.2fx | %.0f/%.0f | %d | %.0f/%.0f | %d | %.4f | %.4f | %.4f | %+.4f | %.2f |\n",
+            set.name, m, variants[v].name.c_str(), med, p90, p99, mx, speedup, quantile(r.nodes, 0.5),
+            quantile(r.nodes, 1.0), r.budget_hits, quantile(r.cluster_it, 0.5), quantile(r.cluster_it, 1.0),
+            r.cluster_bound_hits, r.score.precision(), r.score.recall(), r.score.f1(), df1, fail);
         if (csv) {
           csv << set.name << ',' << m << ',' << variants[v].name << ',' << r.calls << ',' << med << ',' << p90 << ','
               << mx << ',' << speedup << ',' << quantile(r.nodes, 0.5) << ',' << quantile(r.nodes, 1.0) << ','
@@ -172,10 +175,10 @@ int run_strategy_suite(const BenchOptions& o) {
         const double geo_med = quantile(rows[kGeo].us, 0.5), geo_old_med = quantile(rows[kGeoOld].us, 0.5);
         const double p99_ratio = quantile(rows[kJcbb].us, 0.99) / quantile(rows[kGeo].us, 0.99);
         char line[256];
-        std::snprintf(line, sizeof line,
-                      "| %s | %d | %.2fx | %.2fx | %.2f | %.2fx | %+.4f | %+.4f |", set.name, m,
+        std::snprintf(line, sizeof line, "| %s | %d | %.2fx | %.2fx | %.2f | %.2fx | %+.4f | %+.4f |", set.name, m,
                       jcbb_old_med / jcbb_med, geo_old_med / geo_med, geo_med / jcbb_med, p99_ratio,
-                      rows[kJcbb].score.f1() - rows[kJcbbOld].score.f1(), rows[kGeo].score.f1() - rows[kGeoOld].score.f1());
+                      rows[kJcbb].score.f1() - rows[kJcbbOld].score.f1(),
+                      rows[kGeo].score.f1() - rows[kGeoOld].score.f1());
         issue13.push_back(line);
         const bool sparse_or_medium = std::string(set.name) != "dense";
         if (sparse_or_medium) jcbb3x = jcbb3x && jcbb_old_med / jcbb_med >= 3.0;
@@ -192,12 +195,14 @@ int run_strategy_suite(const BenchOptions& o) {
     }
   }
   std::printf("\n# Issue 13: the association's fixed cost, against its baseline in the same run\n\n");
-  std::printf("| map | M | JCBB median speed-up | GEOJCBB median speed-up | GEOJCBB / JCBB median | JCBB / GEOJCBB p99 | "
-              "JCBB dF1 | GEOJCBB dF1 |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| map | M | JCBB median speed-up | GEOJCBB median speed-up | GEOJCBB / JCBB median | JCBB / GEOJCBB p99 | "
+      "JCBB dF1 | GEOJCBB dF1 |\n|---|---|---|---|---|---|---|---|\n");
   for (const std::string& l : issue13) std::printf("%s\n", l.c_str());
-  std::printf("\ngoals: JCBB median >= 3x lower than before on sparse and medium maps: %s; GEOJCBB never slower "
-              "than JCBB at the median: %s; dense maps, M >= 20: GEOJCBB's p99 >= 5x below JCBB's: %s\n",
-              jcbb3x ? "met" : "NOT met", geo_not_slower ? "met" : "NOT met", geo_p99 ? "met" : "NOT met");
+  std::printf(
+      "\ngoals: JCBB median >= 3x lower than before on sparse and medium maps: %s; GEOJCBB never slower "
+      "than JCBB at the median: %s; dense maps, M >= 20: GEOJCBB's p99 >= 5x below JCBB's: %s\n",
+      jcbb3x ? "met" : "NOT met", geo_not_slower ? "met" : "NOT met", geo_p99 ? "met" : "NOT met");
   if (goal_cells > 0) {
     std::printf("\ngoal (dense maps, M >= 20: GEOJCBB >= 5x faster than JCBB, F1 loss <= 0.005): %s\n",
                 goal_met ? "met" : "NOT met");

@@ -54,10 +54,22 @@ namespace {
 using Cell = RunAggregate;
 
 // runs.csv's columns after scenario, strategy, seed (report.hpp: run_csv).
-const std::vector<std::string> kSimCsvColumns{
-    "scans",        "observations", "tp",        "tn",          "fp",          "fn",
-    "f1",           "association_s", "run_s",    "mean_abs_x_m", "mean_abs_y_m", "landmarks",
-    "spurious_in_map", "budget_hits", "relocalised_at_scan", "anees"};
+const std::vector<std::string> kSimCsvColumns{"scans",
+                                              "observations",
+                                              "tp",
+                                              "tn",
+                                              "fp",
+                                              "fn",
+                                              "f1",
+                                              "association_s",
+                                              "run_s",
+                                              "mean_abs_x_m",
+                                              "mean_abs_y_m",
+                                              "landmarks",
+                                              "spurious_in_map",
+                                              "budget_hits",
+                                              "relocalised_at_scan",
+                                              "anees"};
 
 struct SimOptions {
   std::vector<std::string> scenarios;
@@ -312,10 +324,10 @@ struct ReplayOptions {
   std::vector<std::string> strategies;
   bool oracle = false;
   std::string out_dir = "build/results/replay";
-  replay::LogNoise noise;            ///< 0: from the lines, or from the data
+  replay::LogNoise noise;  ///< 0: from the lines, or from the data
   bool noise_from_data = false;
   double noise_inflation = 1.5;
-  double group_radius_m = 0;         ///< > 0: landmark groups for the group-level score
+  double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
   bool known_map = false;
   bool svg = true;
   bool progress = true;
@@ -356,19 +368,21 @@ int run_replay(const ReplayOptions& o) {
     predictions += !in.scan;
     with_truth += in.scan && in.have_truth;
   }
-  std::printf("== %s: %zu odom, %zu meas, %zu truth, %zu landmark lines; %d scans (%d with a true pose), %d predictions\n",
-              o.log.c_str(), log.odometry.size(), log.measurements.size(), log.truth.size(), log.landmarks.size(), scans,
-              with_truth, predictions);
+  std::printf(
+      "== %s: %zu odom, %zu meas, %zu truth, %zu landmark lines; %d scans (%d with a true pose), %d predictions\n",
+      o.log.c_str(), log.odometry.size(), log.measurements.size(), log.truth.size(), log.landmarks.size(), scans,
+      with_truth, predictions);
   {
     auto g = [](double v, const char* unit) {
       char b[48] = "not given";
       if (v > 0) std::snprintf(b, sizeof b, "%.4g %s", v, unit);
       return std::string(b);
     };
-    std::printf("noise where a line gives none (from %s): sigma_range %s, sigma_bearing %s, sigma_v %s, sigma_w %s "
-                "(1-s means)\n",
-                noise_from.c_str(), g(noise.sigma_range_m, "m").c_str(), g(noise.sigma_bearing_rad, "rad").c_str(),
-                g(noise.sigma_v_mps, "m/s").c_str(), g(noise.sigma_w_radps, "rad/s").c_str());
+    std::printf(
+        "noise where a line gives none (from %s): sigma_range %s, sigma_bearing %s, sigma_v %s, sigma_w %s "
+        "(1-s means)\n",
+        noise_from.c_str(), g(noise.sigma_range_m, "m").c_str(), g(noise.sigma_bearing_rad, "rad").c_str(),
+        g(noise.sigma_v_mps, "m/s").c_str(), g(noise.sigma_w_radps, "rad/s").c_str());
   }
   if (!labelled) std::printf("measurements not labelled: no association scores (Table 2), timing and pose only\n");
   if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
@@ -490,8 +504,8 @@ int run_convert(const ConvertOptions& c) {
     out = replay::mrclam_to_log(ds, log, mrclam_model(noise, cal, m.camera, m.drive, m.model_inflation),
                                 m.drop_other_robots);
     what = std::string("the replay's model: camera ") + (m.camera ? "calibrated" : "constant R") + ", drive " +
-           (m.drive ? "calibrated (latency, scale, process noise)" : "commands with constant noise") + ", calibration " +
-           m.calibration + (m.drop_other_robots ? ", other robots dropped" : "");
+           (m.drive ? "calibrated (latency, scale, process noise)" : "commands with constant noise") +
+           ", calibration " + m.calibration + (m.drop_other_robots ? ", other robots dropped" : "");
   }
   if (fs::path(c.out).has_parent_path()) fs::create_directories(fs::path(c.out).parent_path());
   std::ofstream f(c.out);
@@ -774,10 +788,10 @@ int main(int argc, char** argv) {
     if (rp->parsed()) {
       if (rp_mrclam_rules) {
         const RunOptions m = mrclam_run_defaults();
-        if (rp->count("--miss-probability") == 0) ro.run.landmark_policy.miss_probability = m.landmark_policy.miss_probability;
+        if (rp->count("--miss-probability") == 0)
+          ro.run.landmark_policy.miss_probability = m.landmark_policy.miss_probability;
         if (rp->count("--static-gate-level") == 0) ro.run.static_gate_level = m.static_gate_level;
-        if (rp->count("--new-if-taken") == 0)
-          ro.run.new_if_candidates_taken = m.new_if_candidates_taken;
+        if (rp->count("--new-if-taken") == 0) ro.run.new_if_candidates_taken = m.new_if_candidates_taken;
         if (rp->count("--occlusion") == 0) ro.run.occlusion_rad = m.occlusion_rad;
       }
       ro.progress = ro.progress && isatty(STDERR_FILENO);

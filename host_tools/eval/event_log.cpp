@@ -54,8 +54,9 @@ struct Parser {
   double sigma(const std::string& field, const char* what, bool zero_ok) const {
     const double v = number(field, what);
     if (zero_ok ? !(v >= 0) : !(v > 0)) {
-      fail(name, line, std::string(what) + ": a standard deviation must be " + (zero_ok ? "non-negative" : "positive") +
-                           ", not " + field);
+      fail(name, line,
+           std::string(what) + ": a standard deviation must be " + (zero_ok ? "non-negative" : "positive") + ", not " +
+               field);
     }
     return v;
   }
@@ -80,9 +81,9 @@ std::string fmt(double v) {
 }  // namespace
 
 const std::vector<std::string>& meta_keys() {
-  static const std::vector<std::string> k{"min_range_m",    "max_range_m",     "fov_rad",        "sigma_bearing_rad",
-                                          "scan_tolerance_s", "start_x_m",     "start_y_m",      "start_theta_rad",
-                                          "start_var"};
+  static const std::vector<std::string> k{"min_range_m",       "max_range_m",      "fov_rad",
+                                          "sigma_bearing_rad", "scan_tolerance_s", "start_x_m",
+                                          "start_y_m",         "start_theta_rad",  "start_var"};
   return k;
 }
 
@@ -172,7 +173,8 @@ EventLog read_event_log(std::istream& in, const std::string& name) {
       log.truth.push_back(s);
     } else if (kind == "landmark") {
       p.count(f, 4, 4, "label,x,y");
-      if (f[1].empty() || f[1] == kClutterLabel) fail(name, n, "landmark: a label other than '' and 'clutter' expected");
+      if (f[1].empty() || f[1] == kClutterLabel)
+        fail(name, n, "landmark: a label other than '' and 'clutter' expected");
       for (const LandmarkEvent& l : log.landmarks)
         if (l.label == f[1]) fail(name, n, "landmark '" + f[1] + "' given twice");
       log.landmarks.push_back({f[1], p.number(f[2], "x"), p.number(f[3], "y")});
@@ -211,7 +213,8 @@ void write_event_log(const EventLog& log, std::ostream& out, const std::string& 
   }
   out << "geojcbb_log,1\n";
   for (const auto& [k, v] : log.meta) out << "meta," << k << ',' << fmt(v) << '\n';
-  for (const LandmarkEvent& l : log.landmarks) out << "landmark," << l.label << ',' << fmt(l.x) << ',' << fmt(l.y) << '\n';
+  for (const LandmarkEvent& l : log.landmarks)
+    out << "landmark," << l.label << ',' << fmt(l.x) << ',' << fmt(l.y) << '\n';
   for (const mrclam::PoseSample& s : log.truth)
     out << "truth," << fmt(s.t) << ',' << fmt(s.x) << ',' << fmt(s.y) << ',' << fmt(s.theta) << '\n';
   // odom, meas and scan lines merged in time order (meas before odom at equal times: a scan ends
@@ -266,15 +269,18 @@ void as_mrclam(const EventLog& log, mrclam::Dataset& ds, mrclam::RobotLog& robot
 LogNoise estimate_noise(const EventLog& log, double inflation) {
   if (!log.labelled()) throw std::runtime_error("noise from the data needs labelled measurements");
   if (log.truth.empty()) throw std::runtime_error("noise from the data needs ground-truth (truth) lines");
-  if (log.landmarks.empty()) throw std::runtime_error("noise from the data needs the landmark positions (landmark lines)");
+  if (log.landmarks.empty())
+    throw std::runtime_error("noise from the data needs the landmark positions (landmark lines)");
   mrclam::Dataset ds;
   mrclam::RobotLog robot;
   as_mrclam(log, ds, robot);
   const std::vector<mrclam::RobotLog> robots{robot};
   const mrclam::MeasurementNoise m = mrclam::estimate_measurement_noise(ds, robots);
   const mrclam::OdometryNoise o = mrclam::estimate_odometry_noise(robots, 1.0);
-  if (m.count < 10) throw std::runtime_error("noise from the data: fewer than 10 landmark measurements with a true pose");
-  if (o.windows < 5) throw std::runtime_error("noise from the data: fewer than 5 one-second odometry windows with truth");
+  if (m.count < 10)
+    throw std::runtime_error("noise from the data: fewer than 10 landmark measurements with a true pose");
+  if (o.windows < 5)
+    throw std::runtime_error("noise from the data: fewer than 5 one-second odometry windows with truth");
   LogNoise n;
   n.sigma_range_m = inflation * m.range.robust_std;
   n.sigma_bearing_rad = inflation * m.bearing.robust_std;
@@ -303,8 +309,9 @@ LogSource::LogSource(const EventLog& log, const LogNoise& noise) {
   if (log.meta.count("start_x_m") || log.meta.count("start_y_m") || log.meta.count("start_theta_rad")) {
     p0 = {t0, meta("start_x_m", 0), meta("start_y_m", 0), meta("start_theta_rad", 0)};
   } else if (!log.truth.empty() && !mrclam::interpolate_truth(log.truth, t0, p0)) {
-    throw std::runtime_error("no start pose: the truth lines do not cover the first odom line's time (give meta "
-                             "start_x_m, start_y_m, start_theta_rad)");
+    throw std::runtime_error(
+        "no start pose: the truth lines do not cover the first odom line's time (give meta "
+        "start_x_m, start_y_m, start_theta_rad)");
   }
   x0 = Pose2<double>{p0.x, p0.y, p0.theta};
   P0 = Eigen::Matrix3d::Identity() * meta("start_var", 1e-6);
@@ -350,8 +357,9 @@ LogSource::LogSource(const EventLog& log, const LogNoise& noise) {
       in.sigma_w_radps = u.sigma_w * f;
     } else {
       if (!(noise.sigma_v_mps > 0 && noise.sigma_w_radps > 0)) {
-        throw std::runtime_error("odom line at t = " + fmt(u.t) +
-                                 " has no sigma_v, sigma_w and none is given (--sigma-v, --sigma-w, or --noise-from-data)");
+        throw std::runtime_error(
+            "odom line at t = " + fmt(u.t) +
+            " has no sigma_v, sigma_w and none is given (--sigma-v, --sigma-w, or --noise-from-data)");
       }
       const double k = 1.0 / std::sqrt(std::max(dt, 1e-6));
       in.sigma_v_mps = noise.sigma_v_mps * k;

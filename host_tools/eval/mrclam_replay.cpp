@@ -96,7 +96,8 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
         const double gap_end = i + 1 < o.size() ? o[i + 1].t + lag : end;
         const double L = std::max(gap_end - hold_end, dt);
         const double f = kGapMotionStd * std::sqrt(L / dt);
-        push_motion(o[i].v, o[i].w, dt, std::abs(o[i].v) * cal.drive.scale_v * f, std::abs(o[i].w) * cal.drive.scale_w * f);
+        push_motion(o[i].v, o[i].w, dt, std::abs(o[i].v) * cal.drive.scale_v * f,
+                    std::abs(o[i].w) * cal.drive.scale_w * f);
       }
       t = end;
     }
@@ -148,8 +149,8 @@ RunOptions mrclam_run_defaults() {
   return o;
 }
 
-MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibration& calibration, bool camera,
-                         bool drive, double inflation) {
+MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibration& calibration, bool camera, bool drive,
+                         double inflation) {
   MrclamModel m;
   m.noise = noise;
   m.camera = camera;
@@ -179,10 +180,9 @@ std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
 
 namespace {
 // mrclam.csv's columns between dataset, robot, strategy and error (report.hpp: run_csv).
-const std::vector<std::string> kMrclamCsvColumns{"scans",        "observations",  "tp",    "tn",
-                                                 "fp",           "fn",            "precision", "recall",
-                                                 "f1",           "association_s", "run_s", "mean_abs_x_m",
-                                                 "mean_abs_y_m", "landmarks",     "spurious_in_map"};
+const std::vector<std::string> kMrclamCsvColumns{
+    "scans", "observations",  "tp",    "tn",           "fp",           "fn",        "precision",      "recall",
+    "f1",    "association_s", "run_s", "mean_abs_x_m", "mean_abs_y_m", "landmarks", "spurious_in_map"};
 
 void write_trace(const std::string& path, const RunResult& res) {
   {
@@ -265,9 +265,9 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     }
     const auto a = std::chrono::steady_clock::now();
     try {
-      const MrclamModel model =
-          mrclam_model(data[jb.d].noise, data[jb.d].calibration.empty() ? mrclam::RobotCalibration{} : data[jb.d].calibration[jb.r],
-                       o.camera, o.drive, o.model_inflation);
+      const MrclamModel model = mrclam_model(
+          data[jb.d].noise, data[jb.d].calibration.empty() ? mrclam::RobotCalibration{} : data[jb.d].calibration[jb.r],
+          o.camera, o.drive, o.model_inflation);
       MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
@@ -314,9 +314,10 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
           continue;
         }
         const RunResult& res = jb.res;
-        if (!o.trace_dir.empty()) write_trace(o.trace_dir + "/trace_" + std::to_string(dd.number) + "_" +
-                                                  std::to_string(dd.logs[r].robot) + "_" + o.strategies[s].name() + ".csv",
-                                              res);
+        if (!o.trace_dir.empty())
+          write_trace(o.trace_dir + "/trace_" + std::to_string(dd.number) + "_" + std::to_string(dd.logs[r].robot) +
+                          "_" + o.strategies[s].name() + ".csv",
+                      res);
         const double f1 = res.score.f1();
         std::printf("   %.3f/%.3f", f1, res.group_score.f1());
         if (o.strategies[s].oracle) {
@@ -354,15 +355,16 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       // panel per robot, for GEOJCBB (else the first strategy listed).
       std::size_t shown = 0;
       for (std::size_t s = 0; s < o.strategies.size(); ++s)
-        if (!o.strategies[s].oracle && !o.strategies[s].verify && o.strategies[s].strategy == Strategy::kGeojcbb) shown = s;
+        if (!o.strategies[s].oracle && !o.strategies[s].verify && o.strategies[s].strategy == Strategy::kGeojcbb)
+          shown = s;
       std::vector<Eigen::Vector2d> truth_map;
       for (const mrclam::Landmark& l : dd.ds.landmarks) truth_map.emplace_back(l.x, l.y);
       svg::Figure path;
       path.title = "Path and map, MRCLAM_Dataset" + std::to_string(dd.number) + ", " + o.strategies[shown].name();
       path.cols = std::min<int>(3, static_cast<int>(dd.logs.size()));
       for (std::size_t r = 0; r < dd.logs.size(); ++r) {
-        const Job& jb = *std::find_if(jobs.begin(), jobs.end(),
-                                      [&](const Job& x) { return x.d == d && x.r == r && x.s == shown; });
+        const Job& jb =
+            *std::find_if(jobs.begin(), jobs.end(), [&](const Job& x) { return x.d == d && x.r == r && x.s == shown; });
         if (jb.error.empty())
           path.panels.push_back(path_map_panel("robot " + std::to_string(dd.logs[r].robot), jb.res, truth_map));
       }

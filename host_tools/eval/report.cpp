@@ -122,10 +122,11 @@ ReportRow RunAggregate::group_row(const std::string& name) const {
 
 const std::vector<std::string>& run_csv_columns() {
   static const std::vector<std::string> c{
-      "scans",        "observations",    "tp",         "tn",          "fp",           "fn",
-      "precision",    "recall",          "f1",         "association_s", "run_s",      "mean_abs_x_m",
-      "mean_abs_y_m", "landmarks",       "spurious_in_map", "budget_hits", "relocalised_at_scan", "anees",
-      "duplicates",   "fp_clutter",      "group_f1"};
+      "scans",       "observations",        "tp",           "tn",         "fp",
+      "fn",          "precision",           "recall",       "f1",         "association_s",
+      "run_s",       "mean_abs_x_m",        "mean_abs_y_m", "landmarks",  "spurious_in_map",
+      "budget_hits", "relocalised_at_scan", "anees",        "duplicates", "fp_clutter",
+      "group_f1"};
   return c;
 }
 
@@ -135,23 +136,40 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
   for (const std::string& c : columns) {
     if (!first) o << ',';
     first = false;
-    if (c == "scans") o << r.scans;
-    else if (c == "observations") o << r.observations;
-    else if (c == "tp") o << r.score.tp;
-    else if (c == "tn") o << r.score.tn;
-    else if (c == "fp") o << r.score.fp;
-    else if (c == "fn") o << r.score.fn;
-    else if (c == "precision") o << r.score.precision();
-    else if (c == "recall") o << r.score.recall();
-    else if (c == "f1") o << r.score.f1();
-    else if (c == "association_s") o << r.association_s;
-    else if (c == "run_s") o << run_s;
-    else if (c == "mean_abs_x_m") o << r.mean_abs_x_m;
-    else if (c == "mean_abs_y_m") o << r.mean_abs_y_m;
-    else if (c == "landmarks") o << r.landmarks;
-    else if (c == "spurious_in_map") o << r.spurious_in_map;
-    else if (c == "budget_hits") o << r.budget_hits;
-    else if (c == "relocalised_at_scan") o << (kidnap_t_s > 0 ? relocalised_at(r, kidnap_t_s) : -1);
+    if (c == "scans")
+      o << r.scans;
+    else if (c == "observations")
+      o << r.observations;
+    else if (c == "tp")
+      o << r.score.tp;
+    else if (c == "tn")
+      o << r.score.tn;
+    else if (c == "fp")
+      o << r.score.fp;
+    else if (c == "fn")
+      o << r.score.fn;
+    else if (c == "precision")
+      o << r.score.precision();
+    else if (c == "recall")
+      o << r.score.recall();
+    else if (c == "f1")
+      o << r.score.f1();
+    else if (c == "association_s")
+      o << r.association_s;
+    else if (c == "run_s")
+      o << run_s;
+    else if (c == "mean_abs_x_m")
+      o << r.mean_abs_x_m;
+    else if (c == "mean_abs_y_m")
+      o << r.mean_abs_y_m;
+    else if (c == "landmarks")
+      o << r.landmarks;
+    else if (c == "spurious_in_map")
+      o << r.spurious_in_map;
+    else if (c == "budget_hits")
+      o << r.budget_hits;
+    else if (c == "relocalised_at_scan")
+      o << (kidnap_t_s > 0 ? relocalised_at(r, kidnap_t_s) : -1);
     else if (c == "anees") {
       double nees = 0;
       for (const StepRecord& k : r.steps) nees += k.pose_nees;
@@ -162,9 +180,12 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
       for (const MapLandmark& l : r.map)
         if (l.truth >= 0 && per_truth[l.truth]++ > 0) ++dup;
       o << dup;
-    } else if (c == "fp_clutter") o << r.fp_clutter;
-    else if (c == "group_f1") o << r.group_score.f1();
-    else throw std::invalid_argument("run_csv: unknown column '" + c + "'");
+    } else if (c == "fp_clutter")
+      o << r.fp_clutter;
+    else if (c == "group_f1")
+      o << r.group_score.f1();
+    else
+      throw std::invalid_argument("run_csv: unknown column '" + c + "'");
   }
   return o.str();
 }

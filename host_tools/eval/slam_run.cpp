@@ -215,8 +215,7 @@ void SlamSession::relocalise(const Eigen::Matrix3d& P) {
   check(st_->step.relocalise(st_->step.slam().pose(), P), "relocalise");
 }
 
-void SlamSession::scan(std::vector<SimObservation> scan, double t_s,
-                       const Pose2<double>* truth) {
+void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2<double>* truth) {
   State& s = *st_;
   RunScorer& sc = *s.scorer;
   RunResult& res = sc.result();
@@ -358,10 +357,10 @@ bool SimSource::next(RunInput& in) {
     kidnap_due_ = true;
     in = RunInput{};
     in.relocalise = true;
-    in.pose_cov = Eigen::Vector3d(sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m,
-                                  sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m,
-                                  sc_.kidnap_sigma_theta_rad * sc_.kidnap_sigma_theta_rad)
-                      .asDiagonal();
+    in.pose_cov =
+        Eigen::Vector3d(sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m, sc_.kidnap_sigma_xy_m * sc_.kidnap_sigma_xy_m,
+                        sc_.kidnap_sigma_theta_rad * sc_.kidnap_sigma_theta_rad)
+            .asDiagonal();
     return true;
   }
   in = prediction(sc_, step_);

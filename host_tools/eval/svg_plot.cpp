@@ -56,8 +56,8 @@ double text_w(const std::string& s, double size) {
 }
 
 // `anchor` is start, middle or end; `rotate` in degrees about (x, y).
-void text(std::string& o, double x, double y, const std::string& s, double size, const char* anchor,
-          double rotate = 0, const char* extra = "") {
+void text(std::string& o, double x, double y, const std::string& s, double size, const char* anchor, double rotate = 0,
+          const char* extra = "") {
   o += "<text x=\"" + num(x) + "\" y=\"" + num(y) + "\" font-size=\"" + num(size) + "\" text-anchor=\"" + anchor + "\"";
   if (rotate != 0) o += " transform=\"rotate(" + num(rotate) + " " + num(x) + " " + num(y) + ")\"";
   o += extra;
@@ -135,9 +135,7 @@ std::string tick_label(double v, double step) {
   return s;
 }
 
-double step_of(const std::vector<double>& t, const Range& r) {
-  return t.size() >= 2 ? t[1] - t[0] : (r.hi - r.lo);
-}
+double step_of(const std::vector<double>& t, const Range& r) { return t.size() >= 2 ? t[1] - t[0] : (r.hi - r.lo); }
 
 int tick_target(double px, double per_tick) { return std::clamp(static_cast<int>(px / per_tick) + 1, 3, 8); }
 
@@ -184,7 +182,8 @@ void marker(std::string& o, Style st, double x, double y) {
   if (st == Style::kMarkersCross)
     o += "M" + num(x - 3.5) + "," + num(y - 3.5) + "l7,7m0,-7l-7,7";
   else
-    o += "<circle cx=\"" + num(x) + "\" cy=\"" + num(y) + "\" r=\"" + (st == Style::kMarkersDot ? "2.2" : "3.5") + "\"/>";
+    o += "<circle cx=\"" + num(x) + "\" cy=\"" + num(y) + "\" r=\"" + (st == Style::kMarkersDot ? "2.2" : "3.5") +
+         "\"/>";
 }
 
 std::string marker_group(Style st, const std::string& colour) {
@@ -218,7 +217,8 @@ void draw_legend(std::string& o, const std::vector<Entry>& es, double left, doub
     double x = left + std::max(0.0, (width - w) / 2);
     for (const Entry* e : row) {
       if (e->bar) {
-        o += "<rect x=\"" + num(x + 4) + "\" y=\"" + num(y - 5) + "\" width=\"16\" height=\"10\" fill=\"" + esc(e->colour) + "\"/>";
+        o += "<rect x=\"" + num(x + 4) + "\" y=\"" + num(y - 5) + "\" width=\"16\" height=\"10\" fill=\"" +
+             esc(e->colour) + "\"/>";
       } else if (is_line(e->style)) {
         o += "<line x1=\"" + num(x) + "\" y1=\"" + num(y) + "\" x2=\"" + num(x + 24) + "\" y2=\"" + num(y) + "\"" +
              line_attrs(e->style, e->colour) + "/>";
@@ -257,7 +257,8 @@ void draw_series(std::string& o, const Series& s, const std::string& colour, con
   if (!is_line(s.style)) {
     std::vector<std::pair<double, double>> pts;
     for (std::size_t i = 0; i < n; ++i)
-      if (finite(s.x[i]) && finite(s.y[i]) && s.x[i] >= t.x_lo && s.x[i] <= t.x_hi && s.y[i] >= t.y_lo && s.y[i] <= t.y_hi)
+      if (finite(s.x[i]) && finite(s.y[i]) && s.x[i] >= t.x_lo && s.x[i] <= t.x_hi && s.y[i] >= t.y_lo &&
+          s.y[i] <= t.y_hi)
         pts.emplace_back(t.px(s.x[i]), t.py(s.y[i]));
     markers(o, s.style, colour, pts);
     return;
@@ -324,8 +325,8 @@ double max_label_w(const std::vector<double>& ticks, const Range& r) {
   return w;
 }
 
-void draw_panel(std::string& o, const Panel& p, const std::vector<std::string>& cols, double cx,
-                double cy, double w, double h, bool show_xlabel, const std::vector<Entry>* own_legend, int clip_id) {
+void draw_panel(std::string& o, const Panel& p, const std::vector<std::string>& cols, double cx, double cy, double w,
+                double h, bool show_xlabel, const std::vector<Entry>* own_legend, int clip_id) {
   const double top = p.title.empty() ? 10 : 28;
   const double ylab = p.ylabel.empty() ? 0 : 20;
   const double lh = own_legend ? legend_h(*own_legend, w - 20) : 0;
@@ -336,9 +337,11 @@ void draw_panel(std::string& o, const Panel& p, const std::vector<std::string>& 
   PanelLayout l = layout(ylab + 48);
   l = layout(ylab + max_label_w(l.yticks, {l.t.y_lo, l.t.y_hi}) + 12);
   const Transform& t = l.t;
-  if (!p.title.empty()) text(o, t.left + t.width / 2, cy + 19, p.title, kTitleFont, "middle", 0, " font-weight=\"bold\"");
+  if (!p.title.empty())
+    text(o, t.left + t.width / 2, cy + 19, p.title, kTitleFont, "middle", 0, " font-weight=\"bold\"");
   grid_and_axes(o, t, l.xticks, l.yticks, true, {t.x_lo, t.x_hi}, {t.y_lo, t.y_hi});
-  if (!p.xlabel.empty() && show_xlabel) text(o, t.left + t.width / 2, t.top + t.height + 36, p.xlabel, kLabelFont, "middle");
+  if (!p.xlabel.empty() && show_xlabel)
+    text(o, t.left + t.width / 2, t.top + t.height + 36, p.xlabel, kLabelFont, "middle");
   if (!p.ylabel.empty()) text(o, cx + 14, t.top + t.height / 2, p.ylabel, kLabelFont, "middle", -90);
   const std::string id = "gjclip" + std::to_string(clip_id);
   o += "<defs><clipPath id=\"" + id + "\"><rect x=\"" + num(t.left) + "\" y=\"" + num(t.top) + "\" width=\"" +
@@ -390,7 +393,8 @@ PanelLayout layout_panel(const Panel& p, double left, double top, double width, 
     l.xticks = inside(covering_ticks(xr, step), xr);
     l.yticks = inside(covering_ticks(yr, step), yr);
   } else {
-    auto axis = [](const std::optional<Range>& fixed, const Extent& e, int target, Range& r, std::vector<double>& ticks) {
+    auto axis = [](const std::optional<Range>& fixed, const Extent& e, int target, Range& r,
+                   std::vector<double>& ticks) {
       if (fixed) {
         r = proper(fixed->lo, fixed->hi);
         ticks = inside(covering_ticks(r, nice_step(r, target)), r);

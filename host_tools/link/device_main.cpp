@@ -49,8 +49,8 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, [](int) { g_stop = true; });
   std::signal(SIGTERM, [](int) { g_stop = true; });
-  const auto boot_id = static_cast<std::uint32_t>(
-      std::chrono::steady_clock::now().time_since_epoch().count() ^ static_cast<long long>(getpid()));
+  const auto boot_id = static_cast<std::uint32_t>(std::chrono::steady_clock::now().time_since_epoch().count() ^
+                                                  static_cast<long long>(getpid()));
   try {
     std::unique_ptr<geojcbb::host::Transport> t;
     if (pty) {

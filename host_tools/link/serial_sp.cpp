@@ -25,14 +25,10 @@ std::string sp_message(int code) {
       sp_free_error_message(m);
       return s;
     }
-    case SP_ERR_ARG:
-      return "invalid argument";
-    case SP_ERR_MEM:
-      return "out of memory";
-    case SP_ERR_SUPP:
-      return "not supported on this platform";
-    default:
-      return "error " + std::to_string(code);
+    case SP_ERR_ARG: return "invalid argument";
+    case SP_ERR_MEM: return "out of memory";
+    case SP_ERR_SUPP: return "not supported on this platform";
+    default: return "error " + std::to_string(code);
   }
 }
 
@@ -173,9 +169,7 @@ std::vector<PortInfo> list_ports() {
         i.transport = "bluetooth";
         i.bluetooth_address = str_or_empty(sp_get_port_bluetooth_address(*q));
         break;
-      default:
-        i.transport = "native";
-        break;
+      default: i.transport = "native"; break;
     }
     out.push_back(std::move(i));
   }
@@ -206,12 +200,9 @@ TransportKind parse_transport_kind(const std::string& s) {
 
 const char* transport_kind_name(TransportKind k) {
   switch (k) {
-    case TransportKind::kTermios:
-      return "termios";
-    case TransportKind::kLibserialport:
-      return "libserialport";
-    default:
-      return "auto";
+    case TransportKind::kTermios: return "termios";
+    case TransportKind::kLibserialport: return "libserialport";
+    default: return "auto";
   }
 }
 

@@ -15,7 +15,8 @@ std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
   std::vector<Strategy> out;
   for (const std::string& n : names) {
     bool known = false;
-    for (int k = 0; k < kStrategyCount; ++k) known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
+    for (int k = 0; k < kStrategyCount; ++k)
+      known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
     if (!known) throw std::invalid_argument("unknown strategy " + n);
   }
   // No names: the papers' six; PCJCBB (and any later preset) when named.
@@ -62,7 +63,7 @@ proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOption
   c.local_radius_m = static_cast<float>(sensor.max_range_m + o.compensation_m);
   c.groups = static_cast<std::uint8_t>(o.groups);
   c.condition_groups = o.condition_groups;
-  c.node_budget = static_cast<std::uint32_t>(o.node_budget > 0 ? o.node_budget : DesktopBounds::kMaxJcbbNodes);
+  c.node_budget = o.node_budget > 0 ? o.node_budget : DesktopBounds::kMaxJcbbNodes;
   c.min_range_m = static_cast<float>(sensor.min_range_m + o.view_margin_m);
   c.max_range_m = static_cast<float>(sensor.max_range_m - o.view_margin_m);
   c.half_fov_rad = static_cast<float>(0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad);

@@ -210,11 +210,13 @@ RobotLog load_robot(const Dataset& ds, int robot, double scan_tolerance_s) {
   log.robot = robot;
   const std::string stem = ds.dir + "/Robot" + std::to_string(robot) + "_";
   log.odometry.reserve(70000);
-  read_timed(stem + "Odometry.dat", 3, {false, false, false},
-             [&](long, const std::vector<double>& f) { log.odometry.push_back({f[0], f[1], f[2]}); });
+  read_timed(stem + "Odometry.dat", 3, {false, false, false}, [&](long, const std::vector<double>& f) {
+    log.odometry.push_back({f[0], f[1], f[2]});
+  });
   log.truth.reserve(70000);
-  read_timed(stem + "Groundtruth.dat", 4, {false, false, false, false},
-             [&](long, const std::vector<double>& f) { log.truth.push_back({f[0], f[1], f[2], f[3]}); });
+  read_timed(stem + "Groundtruth.dat", 4, {false, false, false, false}, [&](long, const std::vector<double>& f) {
+    log.truth.push_back({f[0], f[1], f[2], f[3]});
+  });
   read_timed(stem + "Measurement.dat", 4, {false, true, false, false}, [&](long, const std::vector<double>& f) {
     const int barcode = static_cast<int>(f[1]);
     const Measurement m{f[0], f[2], f[3], barcode, ds.subject_of(barcode)};
@@ -226,7 +228,8 @@ RobotLog load_robot(const Dataset& ds, int robot, double scan_tolerance_s) {
 
 bool interpolate_truth(const std::vector<PoseSample>& truth, double t, PoseSample& out) {
   if (truth.empty() || !(t >= truth.front().t) || !(t <= truth.back().t)) return false;
-  const auto it = std::lower_bound(truth.begin(), truth.end(), t, [](const PoseSample& s, double v) { return s.t < v; });
+  const auto it =
+      std::lower_bound(truth.begin(), truth.end(), t, [](const PoseSample& s, double v) { return s.t < v; });
   if (it->t == t) {
     out = *it;
     out.theta = wrap(out.theta);
@@ -291,7 +294,8 @@ OdometryNoise estimate_odometry_noise(const std::vector<RobotLog>& robots, doubl
       const double b = a + window_s;
       while (k < o.size() && o[k].t <= a) ++k;  // k >= 1: o.front().t <= a
       bool gap = false;  // the sample in effect at a, and every one up to b, is followed soon enough
-      for (std::size_t j = k - 1; j + 1 < o.size() && o[j].t < b && !gap; ++j) gap = o[j + 1].t - o[j].t > kMaxTruthGap_s;
+      for (std::size_t j = k - 1; j + 1 < o.size() && o[j].t < b && !gap; ++j)
+        gap = o[j + 1].t - o[j].t > kMaxTruthGap_s;
       PoseSample p0, p1;
       if (gap || !interpolate_truth(log.truth, a, p0) || !interpolate_truth(log.truth, b, p1)) {
         ++n.skipped;

@@ -44,7 +44,8 @@ class HeldIntegral {
 
  private:
   std::size_t index(double t) const {
-    const auto it = std::upper_bound(o_.begin(), o_.end(), t, [](double v, const OdometrySample& s) { return v < s.t; });
+    const auto it =
+        std::upper_bound(o_.begin(), o_.end(), t, [](double v, const OdometrySample& s) { return v < s.t; });
     return it == o_.begin() ? 0 : static_cast<std::size_t>(it - o_.begin()) - 1;
   }
   const std::vector<OdometrySample>& o_;
@@ -146,7 +147,8 @@ RobotCalibration calibrate_robot(const Dataset& ds, const RobotLog& log, const C
     for (double a = o.front().t + lag; a + T <= o.back().t + lag; a += T) {
       const double b = a + T;
       PoseSample p0, p1;
-      if (!Fv.covered(a - lag, b - lag) || !interpolate_truth(log.truth, a, p0) || !interpolate_truth(log.truth, b, p1)) {
+      if (!Fv.covered(a - lag, b - lag) || !interpolate_truth(log.truth, a, p0) ||
+          !interpolate_truth(log.truth, b, p1)) {
         continue;
       }
       const double dth = wrap_angle(p1.theta - p0.theta);
@@ -211,7 +213,8 @@ std::string describe(const RobotCalibration& c) {
                 c.robot, c.sensor.range_rel_bias0, c.sensor.range_rel_bias1_per_rad, c.sensor.range_rel_bias2_per_rad2,
                 c.sensor.bearing_bias_rad, c.sensor.sigma_range_m, c.sensor.sigma_range_rel, c.sensor.sigma_bearing_rad,
                 c.measurements, c.outliers, c.latency_s, c.drive.scale_v, c.drive.scale_w, c.drive.alpha_v_sqrt_s,
-                c.drive.q_v_m2ps, c.drive.alpha_w_sqrt_s, c.drive.alpha_wv_rad_sqrt_s_pm, c.drive.q_w_rad2ps, c.windows);
+                c.drive.q_v_m2ps, c.drive.alpha_w_sqrt_s, c.drive.alpha_wv_rad_sqrt_s_pm, c.drive.q_w_rad2ps,
+                c.windows);
   return buf;
 }
 

@@ -50,7 +50,8 @@ Column measure(int number, const std::string& root, double window_s) {
         c.bearing_max = std::max(c.bearing_max, m.bearing);
       }
     }
-    for (std::size_t i = 1; i < log.truth.size(); ++i) c.truth_gaps += log.truth[i].t - log.truth[i - 1].t > kMaxTruthGap_s;
+    for (std::size_t i = 1; i < log.truth.size(); ++i)
+      c.truth_gaps += log.truth[i].t - log.truth[i - 1].t > kMaxTruthGap_s;
   }
   c.z = estimate_measurement_noise(ds, logs);
   c.odo = estimate_odometry_noise(logs, window_s);
@@ -84,7 +85,8 @@ int main(int argc, char** argv) {
       for (int n : {6, 7}) {
         const Dataset ds = load_dataset(dataset_dir(n, root));
         std::printf("MRCLAM_Dataset%d\n", n);
-        for (int r = 1; r <= kRobots; ++r) std::printf("  %s\n", describe(calibrate_robot(ds, load_robot(ds, r), copt)).c_str());
+        for (int r = 1; r <= kRobots; ++r)
+          std::printf("  %s\n", describe(calibrate_robot(ds, load_robot(ds, r), copt)).c_str());
       }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "mrclam_stats: %s\n", e.what());

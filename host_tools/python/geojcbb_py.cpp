@@ -60,21 +60,36 @@ StrategyParams<T> parse_options(const py::kwargs& kw) {
   for (auto item : kw) {
     const std::string k = py::cast<std::string>(item.first);
     py::handle v = item.second;
-    if (k == "confidence") p.confidence = py::cast<double>(v);
-    else if (k == "local_radius_m") p.local_radius_m = py::cast<double>(v);
-    else if (k == "groups") p.groups = py::cast<int>(v);
-    else if (k == "dbscan_eps_m") p.dbscan_eps_m = py::cast<double>(v);
-    else if (k == "dbscan_min_points") p.dbscan_min_points = py::cast<int>(v);
-    else if (k == "joint_recheck") p.joint_recheck = py::cast<bool>(v);
-    else if (k == "condition_groups") p.condition_groups = py::cast<bool>(v);
-    else if (k == "node_budget") p.node_budget = py::cast<int>(v);
-    else if (k == "ambiguity_margin") p.ambiguity_margin = py::cast<double>(v);
-    else if (k == "new_if_candidates_taken") p.new_if_candidates_taken = py::cast<bool>(v);
-    else if (k == "verify") p.verify = py::cast<bool>(v);
-    else if (k == "seed_min_position_var_m2") p.seed_min_position_var_m2 = py::cast<double>(v);
-    else if (k == "consistency_wide_d2") p.consistency_wide_d2 = py::cast<double>(v);
-    else if (k == "consistency_pair_d2") p.consistency_pair_d2 = py::cast<double>(v);
-    else throw py::type_error("unknown option '" + k + "'");
+    if (k == "confidence")
+      p.confidence = py::cast<double>(v);
+    else if (k == "local_radius_m")
+      p.local_radius_m = py::cast<double>(v);
+    else if (k == "groups")
+      p.groups = py::cast<int>(v);
+    else if (k == "dbscan_eps_m")
+      p.dbscan_eps_m = py::cast<double>(v);
+    else if (k == "dbscan_min_points")
+      p.dbscan_min_points = py::cast<int>(v);
+    else if (k == "joint_recheck")
+      p.joint_recheck = py::cast<bool>(v);
+    else if (k == "condition_groups")
+      p.condition_groups = py::cast<bool>(v);
+    else if (k == "node_budget")
+      p.node_budget = py::cast<NodeCount>(v);
+    else if (k == "ambiguity_margin")
+      p.ambiguity_margin = py::cast<double>(v);
+    else if (k == "new_if_candidates_taken")
+      p.new_if_candidates_taken = py::cast<bool>(v);
+    else if (k == "verify")
+      p.verify = py::cast<bool>(v);
+    else if (k == "seed_min_position_var_m2")
+      p.seed_min_position_var_m2 = py::cast<double>(v);
+    else if (k == "consistency_wide_d2")
+      p.consistency_wide_d2 = py::cast<double>(v);
+    else if (k == "consistency_pair_d2")
+      p.consistency_pair_d2 = py::cast<double>(v);
+    else
+      throw py::type_error("unknown option '" + k + "'");
   }
   return p;
 }
@@ -104,8 +119,8 @@ bool same_params(const StrategyParams<T>& a, const StrategyParams<T>& b) {
          a.joint_recheck == b.joint_recheck && a.condition_groups == b.condition_groups &&
          a.node_budget == b.node_budget && a.ambiguity_margin == b.ambiguity_margin &&
          a.new_if_candidates_taken == b.new_if_candidates_taken && a.verify == b.verify &&
-         a.seed_min_position_var_m2 == b.seed_min_position_var_m2 &&
-         a.consistency_wide_d2 == b.consistency_wide_d2 && a.consistency_pair_d2 == b.consistency_pair_d2;
+         a.seed_min_position_var_m2 == b.seed_min_position_var_m2 && a.consistency_wide_d2 == b.consistency_wide_d2 &&
+         a.consistency_pair_d2 == b.consistency_pair_d2;
 }
 
 py::dict diagnostics(const AssociationDiagnostics& d) {
@@ -134,7 +149,7 @@ struct AssocState {
   AssociationConfig<T, PyBounds> cfg;
   Observations<T, PyBounds> obs;
   Prediction<T, PyBounds> pred;
-  Workspace<T, PyBounds> ws;
+  AssociationWorkspace<T, PyBounds> ws;
   Association<T, PyBounds> out;
 };
 
@@ -371,8 +386,8 @@ kNotPositiveDefinite, kNoConvergence).)doc");
            "landmark is expected to be seen; other keywords as for associate(). Raises GeojcbbError.")
       .def("reset", &PySlam::reset, py::arg("x0"), py::arg("P0"),
            "Clears the map. x0 = (x [m], y [m], theta [rad]); P0 (3, 3).")
-      .def("predict", &PySlam::predict, py::arg("v_mps"), py::arg("w_radps"), py::arg("dt_s"),
-           py::arg("sigma_v_mps"), py::arg("sigma_w_radps"), "One odometry interval.")
+      .def("predict", &PySlam::predict, py::arg("v_mps"), py::arg("w_radps"), py::arg("dt_s"), py::arg("sigma_v_mps"),
+           py::arg("sigma_w_radps"), "One odometry interval.")
       .def("step", &PySlam::step, py::arg("z"), py::arg("R"),
            "One scan: z (m, 2) [m, rad], R (m, 2, 2). Returns outcome (list of str), feature, d2, diagnostics.")
       .def_property_readonly("pose", &PySlam::pose, "(x [m], y [m], theta [rad])")
@@ -381,9 +396,10 @@ kNotPositiveDefinite, kNoConvergence).)doc");
   py::class_<PySimulator>(m, "Simulator", "The scenario simulator (host_tools/sim, docs/simulator.md).")
       .def(py::init<const std::string&, std::uint64_t>(), py::arg("scenario_path"), py::arg("seed") = 1,
            "Loads a scenario JSON file (RuntimeError on a bad file).")
-      .def("step", &PySimulator::step,
-           "Advances one control interval; None once the laps are done. Returns t_s [s], true_pose (x, y, theta),\n"
-           "v_mps, w_radps (noisy odometry), scan (bool), z (k, 2), R (k, 2, 2), truth (k,) (landmark index, -1: clutter).")
+      .def(
+          "step", &PySimulator::step,
+          "Advances one control interval; None once the laps are done. Returns t_s [s], true_pose (x, y, theta),\n"
+          "v_mps, w_radps (noisy odometry), scan (bool), z (k, 2), R (k, 2, 2), truth (k,) (landmark index, -1: clutter).")
       .def_property_readonly("landmarks", &PySimulator::landmarks, "true landmark positions (L, 2) [m]")
       .def_property_readonly("dt_s", [](const PySimulator& s) { return s.scenario().dt_s; })
       .def_property_readonly("sigma_v_mps", [](const PySimulator& s) { return s.scenario().sigma_v_mps; })

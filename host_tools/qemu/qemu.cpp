@@ -38,9 +38,23 @@ void QemuMachine::start(const QemuOptions& o) {
   char dir[] = "/tmp/geojcbb-qemu-XXXXXX";
   if (mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp failed");
   socket_path_ = std::string(dir) + "/qmp.sock";
-  std::vector<std::string> args = {o.qemu, "-M", o.machine, "-nodefaults", "-display", "none", "-nic", "none",
-                                   "-semihosting-config", "enable=on,target=native", "-S", "-serial", "pty",
-                                   "-qmp", "unix:" + socket_path_ + ",server=on,wait=off", "-kernel", o.elf};
+  std::vector<std::string> args = {o.qemu,
+                                   "-M",
+                                   o.machine,
+                                   "-nodefaults",
+                                   "-display",
+                                   "none",
+                                   "-nic",
+                                   "none",
+                                   "-semihosting-config",
+                                   "enable=on,target=native",
+                                   "-S",
+                                   "-serial",
+                                   "pty",
+                                   "-qmp",
+                                   "unix:" + socket_path_ + ",server=on,wait=off",
+                                   "-kernel",
+                                   o.elf};
   if (o.icount) {
     args.push_back("-icount");
     args.push_back("shift=0");

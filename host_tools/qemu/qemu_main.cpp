@@ -42,8 +42,7 @@ std::uint32_t maximum(const std::vector<std::uint32_t>& v) {
 template <class B>
 bool matches(const proto::Capabilities& c) {
   return c.max_observations == B::kMaxObservations && c.max_candidates == B::kMaxCandidates &&
-         c.max_groups == B::kMaxGroups && c.max_landmarks == B::kMaxLandmarks &&
-         c.max_jcbb_nodes == static_cast<std::uint32_t>(B::kMaxJcbbNodes);
+         c.max_groups == B::kMaxGroups && c.max_landmarks == B::kMaxLandmarks && c.max_jcbb_nodes == B::kMaxJcbbNodes;
 }
 
 // One strategy over the link, optionally mirrored by the in-process node with bounds B.
@@ -78,8 +77,8 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
 // individually compatible with every landmark: the most expensive gating and grouping, and the
 // widest JCBB tree (which its bound still prunes: no such scan reached the node budget).
 void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Strategy>& strategies, int scans,
-                int timeout_ms, int node_budget) {
-  const std::uint32_t budget = node_budget > 0 ? static_cast<std::uint32_t>(node_budget) : caps.max_jcbb_nodes;
+                int timeout_ms, NodeCount node_budget) {
+  const NodeCount budget = node_budget > 0 ? node_budget : caps.max_jcbb_nodes;
   std::printf("worst case: %u observations, each compatible with each of %u landmarks; node budget %u\n",
               caps.max_observations, caps.max_observations, budget);
   std::printf("  %-8s %6s %12s %14s %14s %14s\n", "strategy", "scans", "budget hits", "assoc median", "assoc max",

@@ -54,8 +54,8 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   const int wdim = 6 + 2 * n;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(dim, wdim);
   Eigen::VectorXd wsig(wdim);
-  wsig << p.sigma_common_xy_m, p.sigma_common_xy_m, p.sigma_common_theta_rad, p.sigma_pose_xy_m,
-      p.sigma_pose_xy_m, p.sigma_pose_theta_rad, Eigen::VectorXd::Constant(2 * n, p.sigma_landmark_m);
+  wsig << p.sigma_common_xy_m, p.sigma_common_xy_m, p.sigma_common_theta_rad, p.sigma_pose_xy_m, p.sigma_pose_xy_m,
+      p.sigma_pose_theta_rad, Eigen::VectorXd::Constant(2 * n, p.sigma_landmark_m);
   A.leftCols<3>() = rigid_motion_jacobian(s.true_pose, s.true_landmarks);
   A.block<3, 3>(0, 3).setIdentity();
   for (int j = 0; j < n; ++j) A.block<2, 2>(3 + 2 * j, 6 + 2 * j).setIdentity();
@@ -69,8 +69,7 @@ Scene make_scene(const SceneParams& p, std::uint64_t seed) {
   predict_measurements(s);
 
   // Observations: distinct landmarks in random order, then clutter; shuffled.
-  s.R = Eigen::Vector2d(p.sigma_range_m * p.sigma_range_m, p.sigma_bearing_rad * p.sigma_bearing_rad)
-            .asDiagonal();
+  s.R = Eigen::Vector2d(p.sigma_range_m * p.sigma_range_m, p.sigma_bearing_rad * p.sigma_bearing_rad).asDiagonal();
   const int clutter = static_cast<int>(std::lround(p.clutter_fraction * p.observations));
   std::vector<int> idx;  // landmarks in the sensor's view (all of them when map_range_m is 0)
   for (int j = 0; j < n; ++j) {

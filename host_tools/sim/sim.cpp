@@ -73,19 +73,19 @@ Scenario load_scenario(const std::string& path) {
     if (j.contains("kidnap")) {  // {"t_s", "dx_m", "dy_m", "dtheta_deg", "sigma_xy_m", "sigma_theta_deg"}
       const auto& k = j.at("kidnap");
       s.kidnap_t_s = k.at("t_s").get<double>();
-      s.kidnap_move = Eigen::Vector3d(k.value("dx_m", 0.0), k.value("dy_m", 0.0),
-                                      k.value("dtheta_deg", 0.0) * kPi<double> / 180);
+      s.kidnap_move =
+          Eigen::Vector3d(k.value("dx_m", 0.0), k.value("dy_m", 0.0), k.value("dtheta_deg", 0.0) * kPi<double> / 180);
       s.kidnap_sigma_xy_m = k.value("sigma_xy_m", s.kidnap_sigma_xy_m);
-      s.kidnap_sigma_theta_rad = k.value("sigma_theta_deg", s.kidnap_sigma_theta_rad * 180 / kPi<double>) *
-                                 kPi<double> / 180;
+      s.kidnap_sigma_theta_rad =
+          k.value("sigma_theta_deg", s.kidnap_sigma_theta_rad * 180 / kPi<double>) * kPi<double> / 180;
     }
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
   }
-  if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.duration_s >= 0) || !(s.speed_mps > 0) || !(s.max_range_m > 0) ||
-      !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) ||
-      s.detection_probability < 0 || s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0 ||
-      !s.kidnap_move.allFinite() || !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0)) {
+  if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.duration_s >= 0) || !(s.speed_mps > 0) ||
+      !(s.max_range_m > 0) || !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) || s.detection_probability < 0 ||
+      s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0 || !s.kidnap_move.allFinite() ||
+      !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0)) {
     throw std::runtime_error(path + ": a parameter is out of range");
   }
   return s;

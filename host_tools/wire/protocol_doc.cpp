@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
     }
     std::size_t i = 0;
     while (i < current.size() && i < block.size() && current[i] == block[i]) ++i;
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(b + i), '\n'));
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(b + i), '\n'));
     std::cerr << path << ": the message tables are stale (first difference at line " << line
               << "); regenerate with `cmake --build build/host-release --target protocol_docs`\n"
               << "  file:      " << current.substr(i, current.find('\n', i) - i) << "\n"

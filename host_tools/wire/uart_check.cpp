@@ -1,4 +1,4 @@
-// geojcbb_uart_check: the host side of the firmware's QEMU smoke test (cmake/check_firmware.cmake,
+// geojcbb_uart_check: the host side of the firmware's QEMU smoke test (toolchains/check_firmware.cmake,
 // MODE=qemu), with the protocol library's own Decoder and message decoders.
 //   --session FILE --write-input OUT [--lead-delimiters N]
 //       writes the session's bytes (FILE: hex lines, '#' comments, one "# replies: tt tt ..." line of
@@ -113,8 +113,8 @@ int check_output(const Session& s, const std::string& path, std::optional<std::u
       if constexpr (std::is_same_v<M, Stats>) stats = msg;
     });
     if (m != Error::kOk) {
-      std::cerr << "a frame of type 0x" << hex2(f.type) << " in the firmware's output does not decode ("
-                << to_string(m) << ")\n";
+      std::cerr << "a frame of type 0x" << hex2(f.type) << " in the firmware's output does not decode (" << to_string(m)
+                << ")\n";
       return 1;
     }
     types.push_back(hex2(f.type));
@@ -125,8 +125,8 @@ int check_output(const Session& s, const std::string& path, std::optional<std::u
   }
   std::cout << out.size() << " bytes out, replies: " << join(types) << "\n";
   if (types != s.replies) {
-    std::cerr << "replies differ from the session's\n  expected: " << join(s.replies) << "\n  got:      "
-              << join(types) << "\n";
+    std::cerr << "replies differ from the session's\n  expected: " << join(s.replies) << "\n  got:      " << join(types)
+              << "\n";
     return 1;
   }
   if (stats) {
@@ -151,7 +151,8 @@ int main(int argc, char** argv) {
   app.add_option("--session", session_path, "session file (hex bytes and a '# replies:' line)")->required();
   auto* write = app.add_option("--write-input", input_path, "write the session's bytes here");
   auto* check = app.add_option("--output", output_path, "check the firmware's UART output in this file");
-  app.add_option("--lead-delimiters", lead, "0x00 bytes before the session (--write-input)")->check(CLI::Range(0, 1 << 20));
+  app.add_option("--lead-delimiters", lead, "0x00 bytes before the session (--write-input)")
+      ->check(CLI::Range(0, 1 << 20));
   auto* stack = app.add_option("--max-stack", max_stack, "largest stack high-water mark in STATS, bytes (--output)");
   write->excludes(check);
   CLI11_PARSE(app, argc, argv);

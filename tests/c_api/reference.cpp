@@ -26,7 +26,7 @@ StrategyParams<float> params_of(const geojcbb_strategy_params& p) {
 }
 ObservationsF g_obs;
 PredictionF g_pred;
-WorkspaceF g_ws;
+AssociationWorkspaceF g_ws;
 AssociationF g_out;
 node::SlamStep<float, B> g_step;
 node::StepResult<float, B> g_res;
@@ -41,8 +41,8 @@ void load(int m, const float* z, const float* R) {
 }  // namespace
 
 extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int m, const float* z, const float* R,
-                             int n, const int32_t* ids, const float* h, const float* C, int32_t* feature,
-                             float* d2, float* joint_d2, int* pairings, uint32_t* nodes) {
+                             int n, const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2,
+                             float* joint_d2, int* pairings, uint32_t* nodes) {
   AssociationConfigF cfg;
   Status s = make_strategy(static_cast<Strategy>(strategy), params_of(*p), cfg);
   if (s != Status::kOk) return static_cast<int>(s);

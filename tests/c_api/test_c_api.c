@@ -8,8 +8,8 @@
 #include "geojcbb.h"
 
 int ref_associate(int strategy, const geojcbb_strategy_params* p, int m, const float* z, const float* R, int n,
-                  const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2,
-                  float* joint_d2, int* pairings, uint32_t* nodes);
+                  const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2, float* joint_d2,
+                  int* pairings, uint32_t* nodes);
 int ref_slam_start(int strategy, float radius_m, float max_range_m, float half_fov_rad, const float x0[3],
                    const float P0[9]);
 int ref_slam_predict(float v, float w, float dt, float sv, float sw);
@@ -19,12 +19,12 @@ static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);
 static GEOJCBB_ALIGNED_STORAGE(slam_mem, GEOJCBB_SLAM_STORAGE_SIZE);
 
 static int failures = 0;
-#define CHECK(cond)                                                   \
-  do {                                                                \
-    if (!(cond)) {                                                    \
-      ++failures;                                                     \
+#define CHECK(cond)                                                            \
+  do {                                                                         \
+    if (!(cond)) {                                                             \
+      ++failures;                                                              \
       fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond); \
-    }                                                                 \
+    }                                                                          \
   } while (0)
 
 static uint32_t rng_state = 12345u;
@@ -70,8 +70,12 @@ static void make_scene(scene* s, int n, int m) {
     s->h[2 * j] = (float)rr;
     s->h[2 * j + 1] = (float)b;
     /* d(range, bearing)/d(x, y, theta) of the robot at the origin */
-    J[2 * j][0] = -lx[j] / rr; J[2 * j][1] = -ly[j] / rr; J[2 * j][2] = 0.0;
-    J[2 * j + 1][0] = ly[j] / (rr * rr); J[2 * j + 1][1] = -lx[j] / (rr * rr); J[2 * j + 1][2] = -1.0;
+    J[2 * j][0] = -lx[j] / rr;
+    J[2 * j][1] = -ly[j] / rr;
+    J[2 * j][2] = 0.0;
+    J[2 * j + 1][0] = ly[j] / (rr * rr);
+    J[2 * j + 1][1] = -lx[j] / (rr * rr);
+    J[2 * j + 1][2] = -1.0;
   }
   for (r = 0; r < 2 * n; ++r)
     for (c = 0; c < 2 * n; ++c) {
@@ -148,8 +152,8 @@ static void test_bad_inputs(void) {
   CHECK(geojcbb_associator_init(assoc_mem.bytes + 8, sizeof assoc_mem - 8, GEOJCBB_STRATEGY_JCBB, &p, &a) ==
         GEOJCBB_INVALID_INPUT);
   CHECK(geojcbb_slam_init(slam_mem.bytes, GEOJCBB_SLAM_STORAGE_SIZE - 1, &sl) == GEOJCBB_INVALID_INPUT);
-  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)(GEOJCBB_STRATEGY_PCJCBB + 1), &p, &a) ==
-        GEOJCBB_INVALID_INPUT);
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)(GEOJCBB_STRATEGY_PCJCBB + 1), &p,
+                                &a) == GEOJCBB_INVALID_INPUT);
   /* GEOJCBB needs r + d > 0 */
   CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, GEOJCBB_STRATEGY_GEOJCBB, &p, &a) ==
         GEOJCBB_INVALID_INPUT);

@@ -38,7 +38,7 @@ std::vector<std::uint8_t> session_bytes() {
   proto::Config c;
   c.strategy = proto::StrategyCode::kGeojcbb;
   c.groups = 3;
-  c.node_budget = static_cast<std::uint32_t>(SmallControllerBounds::kMaxJcbbNodes);  // within every configuration
+  c.node_budget = SmallControllerBounds::kMaxJcbbNodes;  // within every configuration
   append(in, c, seq);
   append(in, proto::Reset{}, seq);
   constexpr double kPi = 3.14159265358979323846;

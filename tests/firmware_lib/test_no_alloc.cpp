@@ -25,8 +25,7 @@ void check_no_alloc(int m, int n) {
     auto p = scene_problem<T, B>(scene_params(m, n, 6), seed);
     const Vec2<T> z0 = p->obs.z[0];
     for (int combo = 0; combo < 8; ++combo) {
-      auto cfg = make_config<T, B>((combo & 4) ? SearchMethod::kIcnn : SearchMethod::kJcbb, combo & 1,
-                                   combo & 2);
+      auto cfg = make_config<T, B>((combo & 4) ? SearchMethod::kIcnn : SearchMethod::kJcbb, combo & 1, combo & 2);
       cfg.local_region = combo & 1;
       cfg.local_radius_m = T(5);
       Status s = Status::kNoConvergence;
@@ -38,9 +37,8 @@ void check_no_alloc(int m, int n) {
       CHECK(s == Status::kInvalidInput);
       p->obs.z[0] = z0;
       // So does computing thresholds.
-      CHECK(allocations_during([&] {
-              s = GateThresholds<T, B::kMaxObservations>::from_confidence(0.95, 0.99, cfg.gate);
-            }) == 0);
+      CHECK(allocations_during(
+                [&] { s = GateThresholds<T, B::kMaxObservations>::from_confidence(0.95, 0.99, cfg.gate); }) == 0);
       CHECK(s == Status::kOk);
     }
   }
@@ -72,8 +70,8 @@ void check_no_alloc_strategies(int m, int n) {
         sp.groups = k < 0 ? -k : k;
         sp.verify = k < 0;
         sp.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed tried on every scene
-        sp.full_covariance_check = k == 0;       // issue 13: the full check and the papers' EM stop
-        sp.papers_em = k == 0;           // too (k = 3, -3: C checked where read)
+        sp.full_covariance_check = k == 0;      // issue 13: the full check and the papers' EM stop
+        sp.papers_em = k == 0;                  // too (k = 3, -3: C checked where read)
         AssociationConfig<T, B> cfg;
         REQUIRE(make_strategy(static_cast<Strategy>(s), sp, cfg) == Status::kOk);
         Status st = Status::kNoConvergence;

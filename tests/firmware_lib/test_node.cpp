@@ -55,7 +55,8 @@ TEST_CASE("node: a session fed as bytes allocates nothing and answers every requ
     b.batch_id = static_cast<std::uint32_t>(k);
     b.count = 3;
     for (int i = 0; i < 3; ++i) {
-      b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
+      b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{
+          5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
     }
     append(in, b, seq++);
   }
@@ -173,8 +174,8 @@ TEST_CASE("node: a lossy channel over 12,000 frames: faults counted exactly, no 
   CHECK(st.unknown_type == 0);
   CHECK(st.invalid_field == 0);
   MESSAGE("frames " << kFrames << ": dropped " << drops << ", duplicated " << dups << ", reordered " << swaps
-                    << ", bit flips " << flips << ", bursts " << bursts << "; bad CRC " << st.bad_crc
-                    << ", bad length " << st.bad_length << ", overrun " << st.overrun);
+                    << ", bit flips " << flips << ", bursts " << bursts << "; bad CRC " << st.bad_crc << ", bad length "
+                    << st.bad_length << ", overrun " << st.overrun);
   CHECK(drops > 200);
   CHECK(flips > 200);
   CHECK(bursts > 100);
@@ -223,7 +224,8 @@ proto::ObsBatchT<24> test_batch(int k) {
   b.batch_id = static_cast<std::uint32_t>(100 + k);
   b.count = 3;
   for (int i = 0; i < 3; ++i) {
-    b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
+    b.obs[static_cast<std::size_t>(i)] = proto::ObservationWire{
+        5.0f - 0.05f * static_cast<float>(k), -0.6f + 0.6f * static_cast<float>(i), 0.01f, 0.0f, 3e-4f};
   }
   return b;
 }

@@ -117,8 +117,8 @@ void check_filter(const ekf::Slam<T, B>& s) {
 
 /// associate(): kOk with a consistent answer, or an error with `out` untouched.
 template <typename T, class B>
-Status check_associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                       const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws, Association<T, B>& out) {
+Status check_associate(const Observations<T, B>& obs, const Prediction<T, B>& pred, const AssociationConfig<T, B>& cfg,
+                       AssociationWorkspace<T, B>& ws, Association<T, B>& out) {
   poison(out);
   const Snapshot<Association<T, B>> before(out);
   const Status st = associate(obs, pred, cfg, ws, out);
@@ -153,8 +153,8 @@ void run(Input& in) {
   using B = FB;
   struct State {
     ekf::Slam<T, B> slam;
-    ekf::Workspace<T, B> ews;
-    Workspace<T, B> ws;
+    ekf::SlamWorkspace<T, B> ews;
+    AssociationWorkspace<T, B> ws;
     Observations<T, B> obs;
     Prediction<T, B> pred;
     Association<T, B> assoc;
@@ -178,7 +178,7 @@ void run(Input& in) {
     if (k & 1) p.confidence = in.f(0.99);
     if (k & 2) p.local_radius_m = in.f(T(10));
     if (k & 4) p.groups = static_cast<int>(in.u8() % 6) - 1;
-    if (k & 8) p.node_budget = static_cast<int>(in.u16() % 400) - 20;
+    if (k & 8) p.node_budget = static_cast<NodeCount>(static_cast<int>(in.u16() % 400) - 20);  // wraps: huge = refused
     if (k & 16) p.dbscan_eps_m = in.f(T(1.5));
     p.condition_groups = k & 32;
     if (k & 64) p.ambiguity_margin = in.f(1.0);
@@ -241,7 +241,7 @@ void run(Input& in) {
         mutates = false;
         s.obs.clear();
         const int m = in.u8() % (B::kMaxObservations + 2);
-        for (int i = 0; i < m; ++i) {  // <= kMaxObservations + 1
+        for (int i = 0; i < m; ++i) {                         // <= kMaxObservations + 1
           const T range = in.f(T(0.5) + T(in.u8()) / T(25));  // one statement each: a fixed read order
           const T bearing = in.f((T(in.u8()) - T(128)) / T(41));
           const Mat2<T> R = cov2(in, T(0.01), T(3e-4));
@@ -256,14 +256,14 @@ void run(Input& in) {
         const int n = in.u8() % (B::kMaxCandidates + 1);
         s.pred.count = n;
         s.pred.C.resize(2 * n, 2 * n);
-        for (int j = 0; j < n; ++j) {  // <= kMaxCandidates
+        for (int j = 0; j < n; ++j) {                                            // <= kMaxCandidates
           s.pred.id[j] = (op & 0x10) ? static_cast<FeatureId>(in.u8() % 4) : j;  // duplicates on request
           const T range = in.f(T(0.5) + T(in.u8()) / T(25));
           const T bearing = in.f((T(in.u8()) - T(128)) / T(41));
           s.pred.h[j] = Vec2<T>(range, bearing);
         }
         Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * B::kMaxCandidates, 2 * B::kMaxCandidates> J(2 * n,
-                                                                                                             2 * n);
+                                                                                                            2 * n);
         for (int r = 0; r < 2 * n; ++r)
           for (int c = 0; c < 2 * n; ++c) J(r, c) = (r == c) ? T(0.1) : T(static_cast<int>(in.u8()) - 128) / T(2000);
         s.pred.C = J * J.transpose();
@@ -306,7 +306,7 @@ void run(Input& in) {
         }
         break;
       }
-      default: {  // review
+      default: {                                                               // review
         ekf::Visibility<T> view{in.f(T(0)), in.f(T(10)), in.f(T(1.5)), T(0)};  // braces: read in order
         if (op & 0x10) view.occlusion_rad = in.f(T(0.05));
         ekf::LandmarkPolicy pol;
@@ -336,7 +336,7 @@ void run(Input& in) {
     for (int j = 0; j < s.slam.landmarks(); ++j) {
       const int l = 3 + 2 * j;
       std::fprintf(stderr, "  l%d (%g %g) P [%g %g; %g]\n", j, double(s.slam.x(l)), double(s.slam.x(l + 1)),
-                  double(s.slam.cov(l, l)), double(s.slam.cov(l, l + 1)), double(s.slam.cov(l + 1, l + 1)));
+                   double(s.slam.cov(l, l)), double(s.slam.cov(l, l + 1)), double(s.slam.cov(l + 1, l + 1)));
     }
 #endif
     if (mutates && st != Status::kOk) require(filter_before.same(s.slam));  // no state change on error

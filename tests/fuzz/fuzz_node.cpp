@@ -111,10 +111,10 @@ struct ReplyChecker {
     } else if constexpr (M::kType == MsgType::kPose) {
       require(m.landmark_count <= NB::kMaxLandmarks);
       landmark_count = m.landmark_count;
-    } else if constexpr (M::kType == MsgType::kHello || M::kType == MsgType::kConfig ||
-                         M::kType == MsgType::kReset || M::kType == MsgType::kOdometry ||
-                         M::kType == MsgType::kObsBatch || M::kType == MsgType::kPing ||
-                         M::kType == MsgType::kStatsRequest || M::kType == MsgType::kShutdown) {
+    } else if constexpr (M::kType == MsgType::kHello || M::kType == MsgType::kConfig || M::kType == MsgType::kReset ||
+                         M::kType == MsgType::kOdometry || M::kType == MsgType::kObsBatch ||
+                         M::kType == MsgType::kPing || M::kType == MsgType::kStatsRequest ||
+                         M::kType == MsgType::kShutdown) {
       require(false);  // host-to-device types are never sent by the device
     }
   }
@@ -248,8 +248,7 @@ struct Session {
     for (std::size_t k = 0; k < 4 && at + k < n; ++k) p[at + k] = static_cast<std::uint8_t>(bits >> (8 * k));
     const std::size_t len = in.u8() & 1 ? n : in.u8() % (n + 1);  // sometimes truncated
     proto::EncodedFrame f;
-    require(proto::encode_frame(static_cast<std::uint8_t>(M::kType), seq++, 0, p.data(), len, f) ==
-            proto::Error::kOk);
+    require(proto::encode_frame(static_cast<std::uint8_t>(M::kType), seq++, 0, p.data(), len, f) == proto::Error::kOk);
     feed_frame(f);
   }
 };

@@ -64,7 +64,8 @@ void check_scenario(const geojcbb::host::Scenario& s) {
 void check_dataset(const mrclam::Dataset& ds) {
   for (std::size_t i = 1; i < ds.landmarks.size(); ++i) require(ds.landmarks[i - 1].subject < ds.landmarks[i].subject);
   for (const mrclam::Landmark& l : ds.landmarks) {
-    require(ds.is_landmark(l.subject) && ds.landmark(l.subject) != nullptr && ds.landmark(l.subject)->subject == l.subject);
+    require(ds.is_landmark(l.subject) && ds.landmark(l.subject) != nullptr &&
+            ds.landmark(l.subject)->subject == l.subject);
   }
 }
 
@@ -100,11 +101,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const int robot = (mode >> 1) % 7;  // 0 and 6 are invalid
     const double tol = (mode & 0x80) ? 0.0 : mrclam::kScanTolerance_s;
-    const std::string names[] = {"Barcodes.dat",
-                                 "Landmark_Groundtruth.dat",
-                                 "Robot" + std::to_string(robot) + "_Groundtruth.dat",
-                                 "Robot" + std::to_string(robot) + "_Odometry.dat",
-                                 "Robot" + std::to_string(robot) + "_Measurement.dat"};
+    const std::string names[] = {
+        "Barcodes.dat", "Landmark_Groundtruth.dat", "Robot" + std::to_string(robot) + "_Groundtruth.dat",
+        "Robot" + std::to_string(robot) + "_Odometry.dat", "Robot" + std::to_string(robot) + "_Measurement.dat"};
     std::size_t at = 0;
     for (const std::string& name : names) {  // <= 5 files
       if (at > rest.size()) break;

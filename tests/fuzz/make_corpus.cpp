@@ -163,8 +163,8 @@ int main(int argc, char** argv) {
 
   // A session: delimiter, HELLO, CONFIG, RESET, ODOMETRY, OBS_BATCH, with garbage in between.
   Bytes session = {0};
-  for (const Bytes& f : {frame(Hello{}, 1), frame(cfg, 2), Bytes{0x13, 0x37, 0x00}, frame(reset, 3),
-                         frame(odo, 4), frame(batch(5), 5), Bytes{0, 0, 0}}) {
+  for (const Bytes& f : {frame(Hello{}, 1), frame(cfg, 2), Bytes{0x13, 0x37, 0x00}, frame(reset, 3), frame(odo, 4),
+                         frame(batch(5), 5), Bytes{0, 0, 0}}) {
     session.insert(session.end(), f.begin(), f.end());
   }
   save("stream_session", session);
@@ -220,12 +220,12 @@ int main(int argc, char** argv) {
   Bytes bp = payload(batch(24));
   bp[4] = 25;
   bp.resize(5 + 25 * 20, 0x3F);
-  save("obs_batch_over_capacity", raw(1, 0, static_cast<std::uint8_t>(MsgType::kObsBatch),
-                                      static_cast<std::uint16_t>(bp.size()), bp));
+  save("obs_batch_over_capacity",
+       raw(1, 0, static_cast<std::uint8_t>(MsgType::kObsBatch), static_cast<std::uint16_t>(bp.size()), bp));
   Bytes bl = payload(batch(3));
   bl.resize(bl.size() - 20);
-  save("obs_batch_len_vs_count", raw(1, 0, static_cast<std::uint8_t>(MsgType::kObsBatch),
-                                     static_cast<std::uint16_t>(bl.size()), bl));
+  save("obs_batch_len_vs_count",
+       raw(1, 0, static_cast<std::uint8_t>(MsgType::kObsBatch), static_cast<std::uint16_t>(bl.size()), bl));
   Bytes rp = payload(reset);
   put_u32_le(rp.data() + 12, float_bits(-1.0f));  // p00 < 0
   save("reset_not_pd", raw(1, 0, static_cast<std::uint8_t>(MsgType::kReset), 36, rp));

@@ -29,7 +29,8 @@ TEST_CASE("scoring: TP, TN, FP, FN on a hand-computed sequence of scans") {
   // Scan 2: landmark 1 at landmark 0's spot -> paired with feature 0: FP
   // (group: TP). Landmark 0 measured far from where it is (0.5 rad off) -> left
   // unpaired while mapped: FN. Clutter far from everything -> TN.
-  s.scan({{Eigen::Vector2d(10, 0), 1, R}, {Eigen::Vector2d(10, 0.5), 0, R}, {Eigen::Vector2d(5, -1), -1, R}}, 2, &truth);
+  s.scan({{Eigen::Vector2d(10, 0), 1, R}, {Eigen::Vector2d(10, 0.5), 0, R}, {Eigen::Vector2d(5, -1), -1, R}}, 2,
+         &truth);
   // Scan 3: landmark 0 where it is -> TP.
   s.scan({{Eigen::Vector2d(10, 0), 0, R}}, 3, &truth);
   const RunResult r = s.finish();

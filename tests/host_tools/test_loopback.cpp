@@ -71,10 +71,11 @@ TEST_CASE("loopback: a whole env1 run over a pty equals the in-process float pip
         pairs += q.outcome == proto::PairingOutcome::kPaired;
       }
       const ekf::Slam<float, DesktopBounds>& sl = ref->slam();
-      const float mine[] = {sl.x(0), sl.x(1), sl.x(2), sl.cov(0, 0), sl.cov(0, 1), sl.cov(0, 2),
-                            sl.cov(1, 1), sl.cov(1, 2), sl.cov(2, 2)};
-      const float theirs[] = {r.pose.x_m, r.pose.y_m, r.pose.theta_rad, r.pose.cov_upper[0], r.pose.cov_upper[1],
-                              r.pose.cov_upper[2], r.pose.cov_upper[3], r.pose.cov_upper[4], r.pose.cov_upper[5]};
+      const float mine[] = {sl.x(0),      sl.x(1),      sl.x(2),      sl.cov(0, 0), sl.cov(0, 1),
+                            sl.cov(0, 2), sl.cov(1, 1), sl.cov(1, 2), sl.cov(2, 2)};
+      const float theirs[] = {r.pose.x_m,          r.pose.y_m,          r.pose.theta_rad,
+                              r.pose.cov_upper[0], r.pose.cov_upper[1], r.pose.cov_upper[2],
+                              r.pose.cov_upper[3], r.pose.cov_upper[4], r.pose.cov_upper[5]};
       for (int k = 0; k < 9; ++k) mismatches += bits(mine[k]) != bits(theirs[k]);
       mismatches += r.pose.landmark_count != sl.landmarks();
     };

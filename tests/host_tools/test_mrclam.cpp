@@ -32,8 +32,8 @@ struct Loaded {
 // Dataset 6 or 7, loaded once for all the tests.
 const Loaded& loaded(int number) {
   const std::string root = default_data_dir();
-  REQUIRE_MESSAGE(fs::is_directory(root), "the MRCLAM data are not at '" << root
-                                              << "': put them beside the repository or set GEOJCBB_MRCLAM_DIR");
+  REQUIRE_MESSAGE(fs::is_directory(root), "the MRCLAM data are not at '"
+                                              << root << "': put them beside the repository or set GEOJCBB_MRCLAM_DIR");
   static std::map<int, Loaded> cache;
   auto it = cache.find(number);
   if (it == cache.end()) {
@@ -229,9 +229,9 @@ TEST_CASE("MRCLAM: ground truth covers every landmark measurement") {
 TEST_CASE("MRCLAM: interpolate_truth on hand-made samples") {
   const std::vector<PoseSample> truth = {
       {10.0, 0.0, 0.0, 3.0},
-      {10.2, 1.0, 2.0, -3.0},   // crosses +-pi: the short way is +0.283 rad
+      {10.2, 1.0, 2.0, -3.0},  // crosses +-pi: the short way is +0.283 rad
       {10.4, 1.0, 2.0, -0.1},
-      {11.0, 2.0, 2.0, 0.1},    // 0.6 s after the previous sample: a gap
+      {11.0, 2.0, 2.0, 0.1},  // 0.6 s after the previous sample: a gap
   };
   PoseSample p;
   REQUIRE(interpolate_truth(truth, 10.1, p));

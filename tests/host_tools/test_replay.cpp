@@ -120,8 +120,8 @@ TEST_CASE("replay: a converted MRCLAM robot replays to the MRCLAM replay's resul
       }
       CHECK(different == 0);
       // And the runs: every count, F1 and ANEES equal.
-      for (const Method m : {Method{Strategy::kGeojcbb, false}, Method{Strategy::kJcbb, false},
-                             Method{Strategy::kJcbb, true}}) {
+      for (const Method m :
+           {Method{Strategy::kGeojcbb, false}, Method{Strategy::kJcbb, false}, Method{Strategy::kJcbb, true}}) {
         CAPTURE(m.name());
         RunOptions o = mrclam_run_defaults();
         m.apply(o);
@@ -179,8 +179,8 @@ TEST_CASE("replay: a hand-made log, its labels, noise and start") {
   CHECK(log.truth_index("B") == 1);
   CHECK(log.truth_index("robot7") == -1);  // not a landmark line: clutter
   CHECK(log.truth_index("clutter") == -1);
-  CHECK_THROWS_WITH_AS(replay::LogSource(log, replay::LogNoise{}),
-                       doctest::Contains("has no sigma_v, sigma_w"), std::runtime_error);
+  CHECK_THROWS_WITH_AS(replay::LogSource(log, replay::LogNoise{}), doctest::Contains("has no sigma_v, sigma_w"),
+                       std::runtime_error);
   replay::LogNoise n;
   n.sigma_range_m = 0.05;
   n.sigma_bearing_rad = 0.01;
@@ -247,8 +247,9 @@ TEST_CASE("replay: every malformed line is an error naming the file, the line an
       {"meas,0,-1,0\n", "log.csv:1: range: must be positive, not -1"},
       {"meas,0,1,7\n", "log.csv:1: bearing: must be in [-pi, pi] rad, not 7"},
       {"meas,0,1,0,A,0.1\n", "log.csv:1: 'meas' gives both sigma_range and sigma_bearing, or neither"},
-      {"meas,0,1,0,A,0.1,0.1,9\n", "log.csv:1: 'meas' takes t,range,bearing[,label[,sigma_range,sigma_bearing]] (7 "
-                                   "fields given)"},
+      {"meas,0,1,0,A,0.1,0.1,9\n",
+       "log.csv:1: 'meas' takes t,range,bearing[,label[,sigma_range,sigma_bearing]] (7 "
+       "fields given)"},
       {"meas,0,1,0,A\nmeas,1,1,0\n",
        "log.csv:2: a measurement without a label, while line 1 has one: label every measurement (clutter: "
        "'clutter') or none"},
@@ -258,7 +259,8 @@ TEST_CASE("replay: every malformed line is an error naming the file, the line an
       {"landmark,clutter,1,2\n", "log.csv:1: landmark: a label other than '' and 'clutter' expected"},
       {"meta,max_range,9\n", "log.csv:1: unknown meta key 'max_range'"},
       {"geojcbb_log,2\n", "log.csv:1: format version 2 not supported (1 expected)"},
-      {"odometry,0,1,0\n", "log.csv:1: unknown line kind 'odometry' (odom, meas, scan, truth, landmark, meta expected)"},
+      {"odometry,0,1,0\n",
+       "log.csv:1: unknown line kind 'odometry' (odom, meas, scan, truth, landmark, meta expected)"},
       {"odom;0;1;0\n", "log.csv:1: unknown line kind 'odom;0;1;0' (odom, meas, scan, truth, landmark, meta expected)"},
   };
   for (const Case& c : cases) {

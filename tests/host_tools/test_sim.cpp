@@ -52,7 +52,7 @@ TEST_CASE("a run is reproducible, drives one counter-clockwise lap and stops") {
     REQUIRE(steps < 2000000);
   }
   CHECK_FALSE(b.step(sb));
-  CHECK(area2 > 0);                                   // counter-clockwise
+  CHECK(area2 > 0);                                                   // counter-clockwise
   CHECK(0.5 * area2 == doctest::Approx(120.0 * 120.0).epsilon(0.1));  // about the path's square
 }
 
@@ -91,8 +91,8 @@ TEST_CASE("odometry noise, sensor limits and clutter follow the scenario") {
 
 TEST_CASE("a bad scenario file is reported with its path") {
   // Only in a fresh temporary directory: tests never write into the working directory.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("geojcbb_test_sim_" + std::to_string(std::random_device{}()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("geojcbb_test_sim_" + std::to_string(std::random_device{}()));
   std::filesystem::create_directories(dir);
   const std::string p = (dir / "bad_scenario.json").string();
   std::ofstream(p) << R"({"landmarks": [[0, 0]], "waypoints": [[0, 0]]})";

@@ -87,10 +87,12 @@ TEST_CASE("SVG output is a standalone, tag-balanced document") {
     Panel p;
     p.title = "strategy " + std::to_string(k);
     p.equal_aspect = true;
-    p.series = {line("true path", {0, 10, 10, 0}, {0, 0, 5, 5}), line("estimate", {0, 10, 9}, {0, 1, 5}, Style::kDashed),
+    p.series = {line("true path", {0, 10, 10, 0}, {0, 0, 5, 5}),
+                line("estimate", {0, 10, 9}, {0, 1, 5}, Style::kDashed),
                 line("true landmarks", {2, 8}, {1, 4}, Style::kMarkersCross),
                 line("estimated landmarks", {2.1, 8.2}, {1.1, 3.9}, Style::kMarkersCircle),
-                line("spurious", {5}, {2}, Style::kMarkersDot), line("empty", {}, {})};
+                line("spurious", {5}, {2}, Style::kMarkersDot),
+                line("empty", {}, {})};
     f.panels.push_back(p);
   }
   for (const bool shared : {true, false}) {
@@ -191,8 +193,16 @@ TEST_CASE("SVG nice ticks cover the range with a 1, 2 or 5 step") {
   const std::vector<double> t = nice_ticks(0, 97);
   REQUIRE(t.size() == 6);
   for (int i = 0; i < 6; ++i) CHECK(t[i] == doctest::Approx(20.0 * i));
-  for (const auto& [lo, hi] : std::vector<std::pair<double, double>>{
-           {0, 97}, {0, 1}, {-3.2, 7.9}, {0.9, 1.0}, {1e-4, 3e-4}, {-250, -3}, {1234, 98765}, {0.001, 0.0237}, {5, 5}, {0, 0}}) {
+  for (const auto& [lo, hi] : std::vector<std::pair<double, double>>{{0, 97},
+                                                                     {0, 1},
+                                                                     {-3.2, 7.9},
+                                                                     {0.9, 1.0},
+                                                                     {1e-4, 3e-4},
+                                                                     {-250, -3},
+                                                                     {1234, 98765},
+                                                                     {0.001, 0.0237},
+                                                                     {5, 5},
+                                                                     {0, 0}}) {
     CAPTURE(lo);
     CAPTURE(hi);
     const std::vector<double> k = nice_ticks(lo, hi);
@@ -245,7 +255,7 @@ TEST_CASE("SVG bars are clipped to the y range") {
   REQUIRE(h.size() == 3);  // by category, then group: 0.95, 0.5, 1.2 (the NaN value has no bar)
   CHECK(h[0] == doctest::Approx(h[2] / 2).epsilon(0.02));  // 0.95 is half of the clipped 1.2
   CHECK(h[2] > 100);
-  CHECK(h[1] == doctest::Approx(0));  // 0.5 lies below the range
+  CHECK(h[1] == doctest::Approx(0));              // 0.5 lies below the range
   CHECK(s.find(">1.200<") != std::string::npos);  // the labels keep the true values
   CHECK(s.find(">0.500<") != std::string::npos);
 }

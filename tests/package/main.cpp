@@ -7,7 +7,7 @@ using B = DefaultBounds;
 int main() {
   static Observations<float, B> obs;
   static Prediction<float, B> pred;
-  static Workspace<float, B> ws;
+  static AssociationWorkspace<float, B> ws;
   static Association<float, B> out;
   AssociationConfig<float, B> cfg;
   if (GateThresholds<float, B::kMaxObservations>::from_confidence(0.99, 0.99, cfg.gate) != Status::kOk) return 1;

@@ -21,7 +21,6 @@ namespace proto_test {
 using namespace geojcbb::proto;
 using Bytes = std::vector<std::uint8_t>;
 
-
 // ---------------------------------------------------------------------------------------------
 // Sample messages: valid, with varied field values (every byte pattern differs from the defaults).
 
@@ -210,7 +209,7 @@ Bytes frame_of(const M& m, std::uint16_t seq = 1, std::uint8_t fl = 0) {
 
 /// A frame assembled by hand: any version, flags, len field and CRC (to reach checks after CRC).
 inline Bytes raw_frame(std::uint8_t ver, std::uint8_t fl, std::uint8_t type, std::uint16_t seq, std::uint16_t len_field,
-                const Bytes& payload, bool good_crc = true) {
+                       const Bytes& payload, bool good_crc = true) {
   Bytes f = {ver, fl, type, 0, 0, 0, 0, 0};
   put_u16_le(f.data() + 4, seq);
   put_u16_le(f.data() + 6, len_field);
@@ -317,6 +316,5 @@ inline std::vector<SchemaField> schema_fields(MsgType type, std::size_t count = 
   }
   return out;
 }
-
 
 }  // namespace proto_test

@@ -33,8 +33,9 @@ TEST_CASE("protocol: COBS round trip, worst-case size and malformed input") {
     for (const int pattern : {0, 1, 2}) {  // all zero, no zero, mixed
       Bytes in(n);
       for (std::size_t i = 0; i < n; ++i) {
-        in[i] = pattern == 0 ? 0 : pattern == 1 ? static_cast<std::uint8_t>(1 + i % 255)
-                                                : static_cast<std::uint8_t>(i % 7 == 0 ? 0 : i);
+        in[i] = pattern == 0   ? 0
+                : pattern == 1 ? static_cast<std::uint8_t>(1 + i % 255)
+                               : static_cast<std::uint8_t>(i % 7 == 0 ? 0 : i);
       }
       Bytes enc(cobs_max_encoded_size(n));
       std::size_t m = 0;

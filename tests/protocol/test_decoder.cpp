@@ -39,7 +39,7 @@ TEST_CASE("protocol: little-endian header and fields, golden PING frame") {
   // i32 two's complement.
   AssocResult a = sample<AssocResult>();
   const Bytes ap = payload_of(a);
-  CHECK(ap[14] == 2);                                                                  // pairs[1].outcome
+  CHECK(ap[14] == 2);                                                               // pairs[1].outcome
   CHECK(Bytes(ap.begin() + 15, ap.begin() + 19) == Bytes{0xFF, 0xFF, 0xFF, 0xFF});  // pairs[1].feature_id = -1
 }
 
@@ -304,8 +304,8 @@ TEST_CASE("protocol: unknown compatible flags are ignored, unknown incompatible 
   std::uint32_t dropped = 0;
   Decoder d;
   for (std::uint8_t bit = 0x10; bit != 0; bit = static_cast<std::uint8_t>(bit << 1)) {
-    const Feed r = feed(d, raw_frame(1, static_cast<std::uint8_t>(bit | 0x01), odo, 9,
-                                     static_cast<std::uint16_t>(pl.size()), pl));
+    const Feed r =
+        feed(d, raw_frame(1, static_cast<std::uint8_t>(bit | 0x01), odo, 9, static_cast<std::uint16_t>(pl.size()), pl));
     CHECK(r.frames.empty());
     REQUIRE(r.errors.size() == 1);
     CHECK(r.errors[0] == Error::kBadFlags);

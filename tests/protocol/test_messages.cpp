@@ -475,8 +475,8 @@ TEST_CASE("protocol: frame overhead of a 20-observation OBS_BATCH") {
   const Bytes pl = payload_of(b);
   const Bytes wire = frame_of(b);
   CHECK(pl.size() == 405);
-  CHECK(wire.size() >= 405 + 12 + 1 + 1);              // header + CRC, one COBS code byte, delimiter
-  CHECK(wire.size() <= max_wire_size(405));            // 405 + 12 + 2 (COBS worst case) + 1
+  CHECK(wire.size() >= 405 + 12 + 1 + 1);    // header + CRC, one COBS code byte, delimiter
+  CHECK(wire.size() <= max_wire_size(405));  // 405 + 12 + 2 (COBS worst case) + 1
   CHECK(max_wire_size(405) == 420);
   MESSAGE("20-obs OBS_BATCH: payload " << pl.size() << " B, wire " << wire.size() << " B, overhead "
                                        << wire.size() - pl.size() << " B");

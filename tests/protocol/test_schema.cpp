@@ -109,11 +109,10 @@ TEST_CASE("protocol: swapping two same-size fields changes the wire and the sche
   const std::string text(kSchemaText, kSchemaTextLength);
   std::size_t at = text.find("\nmsg ");
   REQUIRE(at != std::string::npos);
-  for (const std::string& line : {line_of<Hello>(), line_of<Capabilities>(), line_of<Config>(), line_of<Ack>(),
-                                  line_of<Nack>(), line_of<Ping>(), line_of<Pong>(), line_of<Reset>(),
-                                  line_of<Shutdown>(), line_of<Odometry>(), line_of<ObsBatch>(),
-                                  line_of<AssocResult>(), line_of<Pose>(), line_of<StatsRequest>(), line_of<Stats>(),
-                                  line_of<ErrorReport>()}) {
+  for (const std::string& line :
+       {line_of<Hello>(), line_of<Capabilities>(), line_of<Config>(), line_of<Ack>(), line_of<Nack>(), line_of<Ping>(),
+        line_of<Pong>(), line_of<Reset>(), line_of<Shutdown>(), line_of<Odometry>(), line_of<ObsBatch>(),
+        line_of<AssocResult>(), line_of<Pose>(), line_of<StatsRequest>(), line_of<Stats>(), line_of<ErrorReport>()}) {
     CAPTURE(line);
     CHECK(text.compare(at + 1, line.size(), line) == 0);
     at += line.size();
@@ -128,16 +127,16 @@ TEST_CASE("protocol: the schema text states each field's range as the validator 
   const std::string text(kSchemaText, kSchemaTextLength);
   // A few ranges of version 1, rendered from the descriptions (the validators use the same values;
   // test_messages.cpp checks the boundaries).
-  for (const char* token : {" strategy:u8{0..6} ", " confidence:f32{(0,1)} ", " half_fov_rad:f32{(0,pi]} ",
-                            " bearing_rad:f32{[-pi,pi]} ", " d2:f32{>=0|+inf} ", " error:u8{2..16} ",
-                            " scalar_bytes:u8{4|8} ", " firmware_id:c16{printable,zero-padded}\n",
-                            " count:u8{<=capacity} repeat ", " condition_groups:u8{0|1} "}) {
+  for (const char* token :
+       {" strategy:u8{0..6} ", " confidence:f32{(0,1)} ", " half_fov_rad:f32{(0,pi]} ", " bearing_rad:f32{[-pi,pi]} ",
+        " d2:f32{>=0|+inf} ", " error:u8{2..16} ", " scalar_bytes:u8{4|8} ",
+        " firmware_id:c16{printable,zero-padded}\n", " count:u8{<=capacity} repeat ", " condition_groups:u8{0|1} "}) {
     const std::string t = token;
     CAPTURE(t);
     CHECK(text.find(t) != std::string::npos);
   }
-  for (const char* rule : {" {positive-definite}\nmsg 0x09 SHUTDOWN", " {max_range_m>min_range_m}\n",
-                           " {diagonal>=0}\n"}) {
+  for (const char* rule :
+       {" {positive-definite}\nmsg 0x09 SHUTDOWN", " {max_range_m>min_range_m}\n", " {diagonal>=0}\n"}) {
     const std::string r = rule;
     CAPTURE(r);
     CHECK(text.find(r) != std::string::npos);

@@ -55,10 +55,18 @@ void* counted_new_aligned(std::size_t n, std::align_val_t a) {
 void* operator new(std::size_t n) { return counted_new(n); }
 void* operator new[](std::size_t n) { return counted_new(n); }
 void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  try { return counted_new(n); } catch (...) { return nullptr; }
+  try {
+    return counted_new(n);
+  } catch (...) {
+    return nullptr;
+  }
 }
 void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
-  try { return counted_new(n); } catch (...) { return nullptr; }
+  try {
+    return counted_new(n);
+  } catch (...) {
+    return nullptr;
+  }
 }
 void* operator new(std::size_t n, std::align_val_t a) { return counted_new_aligned(n, a); }
 void* operator new[](std::size_t n, std::align_val_t a) { return counted_new_aligned(n, a); }
@@ -81,8 +89,6 @@ AllocationGuard::AllocationGuard() : new0_(g_new.load()), malloc0_(g_malloc.load
   Eigen::internal::set_is_malloc_allowed(false);
 }
 AllocationGuard::~AllocationGuard() { Eigen::internal::set_is_malloc_allowed(true); }
-std::uint64_t AllocationGuard::allocations() const {
-  return (g_new.load() - new0_) + (g_malloc.load() - malloc0_);
-}
+std::uint64_t AllocationGuard::allocations() const { return (g_new.load() - new0_) + (g_malloc.load() - malloc0_); }
 
 }  // namespace geojcbb::test

@@ -73,8 +73,8 @@ inline WorldPairStatistic world_pair_statistic(const host::Scene& s, int i, int 
   const Eigen::Matrix2d Su = Ji * s.R * Ji.transpose() + Jk * s.R * Jk.transpose();
   const Eigen::Vector2d v = s.est_landmarks[a] - s.est_landmarks[b];
   const int ra = 3 + 2 * a, rb = 3 + 2 * b;
-  const Eigen::Matrix2d Sv = s.P.block<2, 2>(ra, ra) + s.P.block<2, 2>(rb, rb) - s.P.block<2, 2>(ra, rb) -
-                             s.P.block<2, 2>(rb, ra);
+  const Eigen::Matrix2d Sv =
+      s.P.block<2, 2>(ra, ra) + s.P.block<2, 2>(rb, rb) - s.P.block<2, 2>(ra, rb) - s.P.block<2, 2>(rb, ra);
   WorldPairStatistic w;
   w.observed_m = u.norm();
   w.predicted_m = v.norm();
@@ -93,7 +93,7 @@ inline host::Scene wrong_pose_scene() {
   s.est_pose = {2.0, -1.5, 0.8};
   s.true_landmarks = {{8.2, 0.8}, {10.5, -0.8}, {7.1, -2.5}, {10.3, 5.3}, {3.7, 3.9}, {2.4, 5.6}, {9.4, -3.8}};
   const double offsets[7][2] = {{0.03, -0.02}, {-0.04, 0.01}, {0.02, 0.05}, {-0.01, -0.03},
-                                {0.05, 0.02}, {-0.03, 0.04}, {0.01, -0.05}};
+                                {0.05, 0.02},  {-0.03, 0.04}, {0.01, -0.05}};
   const int n = static_cast<int>(s.true_landmarks.size());
   for (int j = 0; j < n; ++j) {
     s.est_landmarks.push_back(s.true_landmarks[j] + Eigen::Vector2d(offsets[j][0], offsets[j][1]));
@@ -105,12 +105,12 @@ inline host::Scene wrong_pose_scene() {
   s.R = Eigen::Vector2d(0.05 * 0.05, 0.01 * 0.01).asDiagonal();
   // Observations in a scrambled order; the clutter return third.
   const int order[8] = {4, 0, -1, 6, 2, 5, 1, 3};
-  const double noise[8][2] = {{0.02, -0.004}, {-0.03, 0.006}, {0, 0}, {0.04, 0.002},
-                              {-0.01, -0.008}, {0.03, 0.005}, {-0.02, 0.003}, {0.01, -0.006}};
+  const double noise[8][2] = {{0.02, -0.004},  {-0.03, 0.006}, {0, 0},         {0.04, 0.002},
+                              {-0.01, -0.008}, {0.03, 0.005},  {-0.02, 0.003}, {0.01, -0.006}};
   for (int q = 0; q < 8; ++q) {
     s.truth.push_back(order[q]);
-    Vec2<double> z = order[q] >= 0 ? observe(s.true_pose, Vec2<double>(s.true_landmarks[order[q]]))
-                                   : Vec2<double>(6.0, -0.3);
+    Vec2<double> z =
+        order[q] >= 0 ? observe(s.true_pose, Vec2<double>(s.true_landmarks[order[q]])) : Vec2<double>(6.0, -0.3);
     z.x() += noise[q][0];
     z.y() += noise[q][1];
     s.z.push_back(z);

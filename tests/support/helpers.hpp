@@ -15,14 +15,12 @@ using SmallBounds = Bounds<8, 12, 4, 1000000, 16>;
 using HostBounds = Bounds<32, 128, 8, 200000, 128>;
 
 template <typename T, class B>
-AssociationConfig<T, B> make_config(SearchMethod search, bool exclusion, bool optimal,
-                                    double confidence = 0.99) {
+AssociationConfig<T, B> make_config(SearchMethod search, bool exclusion, bool optimal, double confidence = 0.99) {
   AssociationConfig<T, B> cfg;
   cfg.search = search;
   cfg.mutual_exclusion = exclusion;
   cfg.optimal_criterion = optimal;
-  REQUIRE(GateThresholds<T, B::kMaxObservations>::from_confidence(confidence, confidence, cfg.gate) ==
-          Status::kOk);
+  REQUIRE(GateThresholds<T, B::kMaxObservations>::from_confidence(confidence, confidence, cfg.gate) == Status::kOk);
   return cfg;
 }
 
@@ -32,7 +30,7 @@ template <typename T, class B>
 struct Problem {
   Observations<T, B> obs;
   Prediction<T, B> pred;
-  Workspace<T, B> ws;
+  AssociationWorkspace<T, B> ws;
   Association<T, B> out;
 };
 template <typename T, class B>

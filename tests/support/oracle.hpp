@@ -42,8 +42,8 @@ class Oracle {
   bool saw_borderline() const { return borderline_; }
 
   LD individual_d2(int i, int j) const {
-    Eigen::Matrix<LD, 2, 2> S = pred_.C.template block<2, 2>(2 * j, 2 * j).template cast<LD>() +
-                                obs_.R[i].template cast<LD>();
+    Eigen::Matrix<LD, 2, 2> S =
+        pred_.C.template block<2, 2>(2 * j, 2 * j).template cast<LD>() + obs_.R[i].template cast<LD>();
     Eigen::Matrix<LD, 2, 1> nu = nu_of(i, j);
     return nu.dot(S.ldlt().solve(nu));
   }
@@ -80,8 +80,7 @@ class Oracle {
       if (!cands_[i].empty()) order_.push_back(i);
     }
     if (cfg_.order_fewest_candidates_first) {
-      std::stable_sort(order_.begin(), order_.end(),
-                       [&](int a, int b) { return cands_[a].size() < cands_[b].size(); });
+      std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return cands_[a].size() < cands_[b].size(); });
     }
     OracleResult r;
     r.min_d2 = std::numeric_limits<LD>::infinity();
@@ -157,8 +156,7 @@ class Oracle {
   void whole_search(std::size_t level, std::vector<std::pair<int, int>>& pairs, OracleResult& r) {
     if (level == order_.size()) {
       const int p = static_cast<int>(pairs.size());
-      if (p > r.max_pairings_whole &&
-          passes(joint_d2(pairs), static_cast<LD>(cfg_.gate.joint[p]))) {
+      if (p > r.max_pairings_whole && passes(joint_d2(pairs), static_cast<LD>(cfg_.gate.joint[p]))) {
         r.max_pairings_whole = p;
       }
       return;

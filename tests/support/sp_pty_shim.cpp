@@ -139,12 +139,8 @@ int ioctl(int fd, unsigned long request, ...) noexcept {
       *word = it->second;
       g_modem_get.fetch_add(1);
       return 0;
-    case TIOCMSET:
-      it->second = *word;
-      break;
-    case TIOCMBIS:
-      it->second |= *word;
-      break;
+    case TIOCMSET: it->second = *word; break;
+    case TIOCMBIS: it->second |= *word; break;
     default:  // TIOCMBIC
       it->second &= ~*word;
       break;

@@ -7,7 +7,7 @@
 //   -> merge (mutual exclusion across groups, joint re-check) -> decline (ambiguous pairings left
 //   kUnmatched, when an ambiguity margin is set) -> verify (pairings outside the answer's largest
 //   pairwise consistent subset dropped; issue 12) -> result
-// No heap: all working memory is the caller's Workspace; outputs are written only on kOk, at the end,
+// No heap: all working memory is the caller's AssociationWorkspace; outputs are written only on kOk, at the end,
 // so a stage may check what it reads (C's cross blocks, issue 13) and still leave them untouched.
 #pragma once
 
@@ -27,20 +27,20 @@ namespace geojcbb {
 
 /// Caller-owned working memory of associate(); typically a static object on the device.
 template <typename T, class B>
-struct Workspace {
+struct AssociationWorkspace {
   CompatibilityTable<T, B> table;
   JcbbWorkspace<T, B> jcbb;
   SearchOutcome<T, B> outcome;
   Groups<B> groups;
   GroupingWorkspace<T, B> grouping;
   MergeWorkspace<T, B> merge;
-  std::array<Hypothesis, B::kMaxObservations> hyp;
+  Hypothesis<B> hyp;
   std::array<bool, B::kMaxObservations> declined;  ///< per observation: ambiguous (decline stage)
   /// Graph nodes of the seed's and the verification's consistency graphs: the verification needs one
   /// per observation.
   static constexpr int kGraphNodes = B::kMaxObservations <= kDefaultGraphNodes ? kDefaultGraphNodes : 128;
   ConsistencyWorkspace<T, B, kGraphNodes> consistency;      ///< seed and verify (issue 12)
-  std::array<std::int16_t, B::kMaxObservations> seed;       ///< the seed's hypothesis; verify's scratch
+  Hypothesis<B> seed;                                       ///< the seed's hypothesis; verify's scratch
   std::array<std::int8_t, B::kMaxObservations> seed_label;  ///< 1: pairing fixed by the seed
   RjcWorkspace<B> rjc;                                      ///< RJC's subsets and tries (issue 12)
 };
@@ -50,7 +50,7 @@ namespace pipeline_detail {
 /// Step 3b: splits the observations into groups (cluster/group.hpp, with the grouping options
 /// only). Returns the groups in ws.groups.
 template <typename T, class B>
-void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
+void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
            AssociationDiagnostics& diag) {
   const GroupingStats st = group_observations(obs, grouping_options(cfg), ws.grouping, ws.groups);
   diag.cluster_iterations = static_cast<std::uint16_t>(st.iterations);
@@ -60,7 +60,7 @@ void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, Wo
 /// Decline stage: the pairings of observations marked ambiguous are removed (they become
 /// kUnmatched). Returns whether any was.
 template <typename T, class B>
-bool apply_decline(int m, Workspace<T, B>& ws, AssociationDiagnostics& diag) {
+bool apply_decline(int m, AssociationWorkspace<T, B>& ws, AssociationDiagnostics& diag) {
   bool any = false;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     if (!ws.declined[i]) continue;
@@ -97,8 +97,8 @@ ConsistencyOptions<T> consistency_options(const AssociationConfig<T, B>& cfg) {
 /// @return kOk; kNotPositiveDefinite (C not PSD).
 template <typename T, class B>
 [[nodiscard]] Status seed(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                          const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws, AssociationDiagnostics& diag,
-                          bool& seeded) {
+                          const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
+                          AssociationDiagnostics& diag, bool& seeded) {
   seeded = false;
   const ConsistencyOptions<T> opt = consistency_options(cfg);
   ws.consistency.geometry.prepare(obs, pred);
@@ -126,8 +126,8 @@ template <typename T, class B>
 /// @return kOk; kNotPositiveDefinite (C not PSD).
 template <typename T, class B>
 [[nodiscard]] Status verify(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                            const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws, AssociationDiagnostics& diag,
-                            int& dropped) {
+                            const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
+                            AssociationDiagnostics& diag, int& dropped) {
   dropped = 0;
   const Status s = consistent_subset(obs, pred, consistency_options(cfg), ws.hyp, ws.consistency);
   if (s != Status::kOk) return s;
@@ -160,7 +160,7 @@ template <typename T, class B>
 ///         indefinite during a joint test or a pairwise distance test (seed, verify).
 template <typename T, class B>
 [[nodiscard]] Status associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                               const AssociationConfig<T, B>& cfg, Workspace<T, B>& ws,
+                               const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
                                Association<T, B>& out) {
   Status s = validate(obs, pred, cfg);
   if (s != Status::kOk) return s;
@@ -202,8 +202,8 @@ template <typename T, class B>
       diag.seed_used = true;
       diag.groups = 1;
       SearchOutcome<T, B>& o = ws.outcome;
-      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0},
-                      static_cast<std::uint32_t>(cfg.node_budget), ws.jcbb, o, &ws.seed);
+      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0}, cfg.node_budget, ws.jcbb, o,
+                      &ws.seed);
       if (s != Status::kOk) return s;
       diag.jcbb_nodes = o.nodes;
       diag.node_budget_hit = o.budget_hit;
@@ -218,8 +218,8 @@ template <typename T, class B>
       }
     } else if (cfg.rjc && pipeline_detail::compatible_observations(m, ws.table) > cfg.rjc_subset) {
       RjcStats st;
-      s = rjc_search(obs, pred, cfg, ws.table, static_cast<std::uint32_t>(cfg.node_budget), cfg.rjc_tries,
-                     cfg.rjc_subset, cfg.rjc_seed, ws.jcbb, ws.outcome, ws.rjc, ws.hyp, joint_d2, st);
+      s = rjc_search(obs, pred, cfg, ws.table, cfg.node_budget, cfg.rjc_tries, cfg.rjc_subset, cfg.rjc_seed, ws.jcbb,
+                     ws.outcome, ws.rjc, ws.hyp, joint_d2, st);
       if (s != Status::kOk) return s;
       diag.rjc_used = true;
       diag.groups = 1;
@@ -228,7 +228,7 @@ template <typename T, class B>
     } else {
       pipeline_detail::group(obs, cfg, ws, diag);
       diag.groups = static_cast<std::uint8_t>(ws.groups.count);
-      std::uint32_t nodes_left = static_cast<std::uint32_t>(cfg.node_budget);
+      NodeCount nodes_left = cfg.node_budget;
       for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
       for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
         SearchOutcome<T, B>& o = ws.outcome;
@@ -293,7 +293,7 @@ template <typename T, class B>
       const Mat2<T> S = pred.C.template block<2, 2>(2 * c, 2 * c) + obs.R[i];
       out.d2[i] = mahalanobis2(innovation(obs.z[i], pred.h[c]), S);
     } else {
-      bool free_compatible = false;  // a compatible candidate that no pairing holds
+      bool free_compatible = false;                                    // a compatible candidate that no pairing holds
       for (int q = 0; q < ws.table.count[i] && !free_compatible; ++q)  // <= kMaxCandidates
         free_compatible = !taken_rule || ws.jcbb.used[ws.table.cand[i][q]] == 0;
       out.feature[i] = free_compatible || ws.declined[i] ? kUnmatched : kNewFeature;

@@ -9,11 +9,11 @@ namespace geojcbb {
 using ObservationsF = Observations<float, DefaultBounds>;
 using PredictionF = Prediction<float, DefaultBounds>;
 using AssociationConfigF = AssociationConfig<float, DefaultBounds>;
-using WorkspaceF = Workspace<float, DefaultBounds>;
+using AssociationWorkspaceF = AssociationWorkspace<float, DefaultBounds>;
 using AssociationF = Association<float, DefaultBounds>;
 
 /// associate() for float and DefaultBounds.
-[[nodiscard]] Status associate_f32(const ObservationsF& obs, const PredictionF& pred,
-                                   const AssociationConfigF& cfg, WorkspaceF& ws, AssociationF& out);
+[[nodiscard]] Status associate_f32(const ObservationsF& obs, const PredictionF& pred, const AssociationConfigF& cfg,
+                                   AssociationWorkspaceF& ws, AssociationF& out);
 
 }  // namespace geojcbb

@@ -124,8 +124,8 @@ extern "C" [[noreturn]] void geojcbb_reset_continue() {
   geojcbb::port::stack::install_guard();
   for (InitFn* f = __preinit_array_start; f < __preinit_array_end; ++f) (*f)();  // <= array length
   for (InitFn* f = __init_array_start; f < __init_array_end; ++f) (*f)();        // <= array length
-  // Calling main is the C runtime's job, and this is the C runtime: ISO C++ forbids it in a program
-  // (-Wpedantic), so the one call is exempt.
+    // Calling main is the C runtime's job, and this is the C runtime: ISO C++ forbids it in a program
+    // (-Wpedantic), so the one call is exempt.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpedantic"
   main();

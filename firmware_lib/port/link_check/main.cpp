@@ -9,7 +9,7 @@ namespace {
 geojcbb::ObservationsF g_obs;
 geojcbb::PredictionF g_pred;
 geojcbb::AssociationConfigF g_cfg;
-geojcbb::WorkspaceF g_ws;
+geojcbb::AssociationWorkspaceF g_ws;
 geojcbb::AssociationF g_out;
 geojcbb::ConsistencyOptionsF g_copt;
 geojcbb::ConsistencyWorkspaceF g_cws;

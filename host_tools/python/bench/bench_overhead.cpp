@@ -23,7 +23,7 @@ namespace {
 struct State {
   Observations<double, PyBounds> obs;
   Prediction<double, PyBounds> pred;
-  Workspace<double, PyBounds> ws;
+  AssociationWorkspace<double, PyBounds> ws;
   Association<double, PyBounds> out;
 };
 

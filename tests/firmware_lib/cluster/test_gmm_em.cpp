@@ -41,8 +41,7 @@ int draw(const std::vector<Blob>& blobs, std::mt19937_64& rng, Points<T, B>& p, 
 }
 }  // namespace
 
-TEST_CASE_TEMPLATE("EM never decreases its objective (within rounding) on random point sets", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("EM never decreases its objective (within rounding) on random point sets", T, float, double) {
   std::mt19937_64 rng(21);
   std::uniform_real_distribution<double> u(-8, 8);
   auto ws = std::make_unique<EmWorkspace<T, Small>>();
@@ -89,7 +88,8 @@ TEST_CASE_TEMPLATE("EM recovers the parameters of a well-separated mixture", T, 
     for (const Blob& b : blobs) {
       int q = 0;  // the fitted component nearest this blob
       for (int k = 1; k < ws->k; ++k)
-        if ((ws->mu[k].template cast<double>() - b.mu).norm() < (ws->mu[q].template cast<double>() - b.mu).norm()) q = k;
+        if ((ws->mu[k].template cast<double>() - b.mu).norm() < (ws->mu[q].template cast<double>() - b.mu).norm())
+          q = k;
       CHECK((ws->mu[q].template cast<double>() - b.mu).norm() < 0.4);
       CHECK(std::exp(static_cast<double>(ws->log_pi[q])) == doctest::Approx(double(b.n) / m).epsilon(1e-3));
       CHECK((ws->sigma[q].template cast<double>() - b.sigma).norm() < 0.5 * b.sigma.norm());

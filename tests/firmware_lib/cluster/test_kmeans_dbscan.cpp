@@ -91,8 +91,7 @@ TEST_CASE_TEMPLATE("DBSCAN: chain, border and noise points (hand-checked)", T, f
   CHECK(g.label[0] == g.label[2]);  // ends are border points of the middle's cluster
 }
 
-TEST_CASE_TEMPLATE("DBSCAN on random sets equals connected components of core points (brute force)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("DBSCAN on random sets equals connected components of core points (brute force)", T, float, double) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(0, 8);
   for (int trial = 0; trial < 300; ++trial) {
@@ -113,7 +112,10 @@ TEST_CASE_TEMPLATE("DBSCAN on random sets equals connected components of core po
     // Union-find over core points linked within eps.
     std::vector<int> parent(m);
     for (int i = 0; i < m; ++i) parent[i] = i;
-    auto find = [&](int a) { while (parent[a] != a) a = parent[a] = parent[parent[a]]; return a; };
+    auto find = [&](int a) {
+      while (parent[a] != a) a = parent[a] = parent[parent[a]];
+      return a;
+    };
     for (int a = 0; a < m; ++a)
       for (int b = 0; b < m; ++b)
         if (core[a] && core[b] && near(a, b)) parent[find(a)] = find(b);
@@ -138,8 +140,7 @@ TEST_CASE_TEMPLATE("DBSCAN on random sets equals connected components of core po
   }
 }
 
-TEST_CASE_TEMPLATE("DBSCAN never drops an observation; surplus groups merge into the last", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("DBSCAN never drops an observation; surplus groups merge into the last", T, float, double) {
   // Six isolated points, MaxGroups = 3: groups 0, 1 and the rest.
   auto p = pts_of<T, Narrow>({{0, 0}, {10, 0}, {20, 0}, {30, 0}, {40, 0}, {50, 0}});
   Groups<Narrow> g;

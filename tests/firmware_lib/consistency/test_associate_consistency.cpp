@@ -53,7 +53,7 @@ host::Scene loop_closure_scene() {
   host::Scene s;
   s.true_pose = {0, 0, 0};
   s.est_pose = {0.5, -0.4, 0.02};
-  s.true_landmarks = {{2.5, 0.6}, {3.2, -1.1}, {9.6, 0.9},  {10.4, -0.7}, {5.0, 4.5},
+  s.true_landmarks = {{2.5, 0.6},  {3.2, -1.1}, {9.6, 0.9}, {10.4, -0.7}, {5.0, 4.5},
                       {7.5, -4.2}, {4.0, -3.0}, {8.5, 3.5}, {6.0, 0.0}};
   const int n = static_cast<int>(s.true_landmarks.size());
   s.est_landmarks = s.true_landmarks;
@@ -99,8 +99,8 @@ TEST_CASE_TEMPLATE("verify: at a constructed loop closure JCBB pairs wrongly and
   REQUIRE(associate(verified->obs, verified->pred, jcbb_config<T>(true), verified->ws, verified->out) == Status::kOk);
   MESSAGE("JCBB: " << plain->out.pairings << " pairings, " << wrong_pairings(s, plain->out.candidate, m)
                    << " wrong; verified: " << verified->out.pairings << " pairings, "
-                   << wrong_pairings(s, verified->out.candidate, m) << " wrong, "
-                   << verified->out.diag.verify_dropped << " dropped");
+                   << wrong_pairings(s, verified->out.candidate, m) << " wrong, " << verified->out.diag.verify_dropped
+                   << " dropped");
   // Verification only removes pairings, and it removes every wrong one here.
   CHECK(verified->out.diag.verify_dropped > 0);
   CHECK(verified->out.pairings == plain->out.pairings - verified->out.diag.verify_dropped);

@@ -105,8 +105,8 @@ TEST_CASE_TEMPLATE("consistency: the hypothesis is invariant to a rigid motion o
   CHECK(compared == 120);
 }
 
-TEST_CASE_TEMPLATE("consistency: a badly wrong pose, where nearest neighbour fails, gets the true pairing", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("consistency: a badly wrong pose, where nearest neighbour fails, gets the true pairing", T, float,
+                   double) {
   const host::Scene s = wrong_pose_scene();
   // Precondition of the construction: no two landmark pairs are equally far apart (the 21 distances
   // differ by at least 0.15 m, the most seven points in this area allowed in a random search), so a
@@ -355,18 +355,16 @@ TEST_CASE("consistency: float and double agree on well-conditioned scenes") {
 }
 
 TEST_CASE("consistency: graph and search sizes on generated scenes (reported for docs/consistency.md)") {
-  MESSAGE("sizeof ConsistencyWorkspace<float, DefaultBounds> = " << sizeof(ConsistencyWorkspace<float, B>)
-                                                                 << " B (graph " << sizeof(BitsetGraph<64>)
-                                                                 << " B, search "
-                                                                 << sizeof(ConsistencyWorkspace<float, B>::search)
-                                                                 << " B)");
+  MESSAGE("sizeof ConsistencyWorkspace<float, DefaultBounds> = "
+          << sizeof(ConsistencyWorkspace<float, B>) << " B (graph " << sizeof(BitsetGraph<64>) << " B, search "
+          << sizeof(ConsistencyWorkspace<float, B>::search) << " B)");
   struct Setting {
     const char* name;
     int m, n;
   };
-  for (const Setting& st : {Setting{"8 observations, 8 candidates", 8, 8},
-                            Setting{"12 observations, 16 candidates", 12, 16},
-                            Setting{"16 observations, 24 candidates", 16, 24}}) {
+  for (const Setting& st :
+       {Setting{"8 observations, 8 candidates", 8, 8}, Setting{"12 observations, 16 candidates", 12, 16},
+        Setting{"16 observations, 24 candidates", 16, 24}}) {
     for (const PairingGate gate : {PairingGate::kWide, PairingGate::kEveryCandidate}) {
       std::vector<int> nodes, edges, search, wrong, size, true_pairs;
       int truncated = 0, with_wrong = 0, smaller = 0;
@@ -398,10 +396,11 @@ TEST_CASE("consistency: graph and search sizes on generated scenes (reported for
         return std::to_string(v[v.size() / 2]) + " (max " + std::to_string(v.back()) + ")";
       };
       MESSAGE(std::string(st.name) << ", " << std::string(gate == PairingGate::kWide ? "wide gate" : "every candidate")
-                      << ", 300 scenes: graph nodes " << med(nodes) << ", truncated " << truncated << "; edges "
-                      << med(edges) << "; search nodes " << med(search) << "; clique " << med(size)
-                      << " for true pairings " << med(true_pairs) << "; scenes with a wrong pairing " << with_wrong
-                      << ", missing a true one " << smaller);
+                                   << ", 300 scenes: graph nodes " << med(nodes) << ", truncated " << truncated
+                                   << "; edges " << med(edges) << "; search nodes " << med(search) << "; clique "
+                                   << med(size) << " for true pairings " << med(true_pairs)
+                                   << "; scenes with a wrong pairing " << with_wrong << ", missing a true one "
+                                   << smaller);
     }
   }
 }

@@ -257,8 +257,7 @@ int check_random_graphs(std::uint64_t seed, std::initializer_list<double> densit
 }  // namespace
 
 TEST_CASE("max clique equals brute force on thousands of random graphs (<= 20 nodes)") {
-  CHECK(check_random_graphs(20240612, {0.1, 0.3, 0.5, 0.7, 0.9, 0.97}, 0, 20, 600, brute_force_clique_number) ==
-        3600);
+  CHECK(check_random_graphs(20240612, {0.1, 0.3, 0.5, 0.7, 0.9, 0.97}, 0, 20, 600, brute_force_clique_number) == 3600);
 }
 
 TEST_CASE("max clique equals Bron-Kerbosch on random graphs of 21..64 nodes") {
@@ -272,9 +271,9 @@ TEST_CASE("max clique on known hard graphs (DIMACS-style families, <= 64 nodes)"
     int omega;
   };
   const Case cases[] = {
-      {"hamming6-2", hamming(6, 2), 32},  // the even-weight code
-      {"hamming6-3", hamming(6, 3), 8},   // A(6,3) = 8
-      {"hamming6-4", hamming(6, 4), 4},   // DIMACS hamming6-4
+      {"hamming6-2", hamming(6, 2), 32},      // the even-weight code
+      {"hamming6-3", hamming(6, 3), 8},       // A(6,3) = 8
+      {"hamming6-4", hamming(6, 4), 4},       // DIMACS hamming6-4
       {"johnson8-2-4", johnson(8, 2, 4), 4},  // DIMACS johnson8-2-4: disjoint pairs of 8
       {"johnson7-3-4", johnson(7, 3, 4), 7},  // A(7,4,3) = 7: the Fano plane's lines
       {"johnson8-3-4", johnson(8, 3, 4), 8},  // A(8,4,3) = 8
@@ -296,8 +295,8 @@ TEST_CASE("max clique on known hard graphs (DIMACS-style families, <= 64 nodes)"
     CHECK(oracle_clique_number(c.g) == c.omega);
     CHECK(r.size == c.omega);
     CHECK(c.g.is_clique(r.members));
-    MESSAGE(c.name << ": " << c.g.count << " nodes, " << c.g.edges() << " edges, omega " << r.size << ", "
-                   << r.nodes << " search nodes");
+    MESSAGE(c.name << ": " << c.g.count << " nodes, " << c.g.edges() << " edges, omega " << r.size << ", " << r.nodes
+                   << " search nodes");
   }
 }
 

@@ -64,12 +64,12 @@ void check_selection(const Inputs<T>& in, const ConsistencyOptions<T>& opt,
 
 }  // namespace
 
-TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle computed from P", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle computed from P", T, float, double) {
   const double eps = std::numeric_limits<T>::epsilon();
   int compared = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const host::Scene s = host::make_scene(consistency_scene_params(10, 16, 0.5 * static_cast<double>(seed), 0.05 * static_cast<double>(seed)), seed);
+    const host::Scene s = host::make_scene(
+        consistency_scene_params(10, 16, 0.5 * static_cast<double>(seed), 0.05 * static_cast<double>(seed)), seed);
     auto in = load<T>(s);
     for (int i = 0; i < in->obs.count; ++i) {
       for (int k = i + 1; k < in->obs.count; ++k) {
@@ -94,8 +94,8 @@ TEST_CASE_TEMPLATE("consistency: the pair statistic equals a world-frame oracle 
   CHECK(compared > 10000);
 }
 
-TEST_CASE_TEMPLATE("consistency: the pair statistic is pose-free (estimate, pose and common map covariance)",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("consistency: the pair statistic is pose-free (estimate, pose and common map covariance)", T, float,
+                   double) {
   const double eps = std::numeric_limits<T>::epsilon();
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const host::Scene s = host::make_scene(consistency_scene_params(8, 12, 0.3, 0.03), seed);
@@ -161,8 +161,7 @@ TEST_CASE("consistency: the distance test is calibrated on true pairings (chi-sq
   CHECK(rate == doctest::Approx(0.99).epsilon(0.005));
 }
 
-TEST_CASE_TEMPLATE("consistency: graph nodes from the wide gate, capped at MaxNodes by best d2", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("consistency: graph nodes from the wide gate, capped at MaxNodes by best d2", T, float, double) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const host::Scene s = host::make_scene(consistency_scene_params(12, 20, 1.0, 0.1), seed);
     auto in = load<T>(s);

@@ -65,7 +65,7 @@ void check_close(const Slam<T, B>& s, const Dense& ref, const char* what) {
 template <typename T>
 struct Rig {
   Slam<T, CB> slam;
-  ekf::Workspace<T, CB> ws;
+  ekf::SlamWorkspace<T, CB> ws;
   Observations<T, CB> obs;
   Association<T, CB> assoc;
   Prediction<T, CB> pred;
@@ -140,8 +140,8 @@ Dense reference_update(const Rig<T>& g) {
 }
 }  // namespace
 
-TEST_CASE_TEMPLATE("packed covariance: accessors, symmetric by construction, the packed index a bijection", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("packed covariance: accessors, symmetric by construction, the packed index a bijection", T, float,
+                   double) {
   auto g = std::make_unique<Rig<T>>();
   std::mt19937 rng(11);
   random_state(*g, rng, CB::kMaxLandmarks, true);
@@ -160,8 +160,7 @@ TEST_CASE_TEMPLATE("packed covariance: accessors, symmetric by construction, the
                 "packed: less than the dense square");
 }
 
-TEST_CASE_TEMPLATE("packed covariance against a dense reference: predict, update, augment, removal", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("packed covariance against a dense reference: predict, update, augment, removal", T, float, double) {
   for (int trial = 0; trial < 12; ++trial) {
     CAPTURE(trial);
     const bool fej = trial % 2 == 0;
@@ -175,8 +174,8 @@ TEST_CASE_TEMPLATE("packed covariance against a dense reference: predict, update
       Dense ref = dense(g->slam);
       Mat3<double> F;
       Mat32<double> G;
-      const Pose2<double> next = move(Pose2<double>{ref.x(0), ref.x(1), ref.x(2)},
-                                      Odometry<double>{0.8, -0.2, 0.1, 0.2, 0.05}, &F, &G);
+      const Pose2<double> next =
+          move(Pose2<double>{ref.x(0), ref.x(1), ref.x(2)}, Odometry<double>{0.8, -0.2, 0.1, 0.2, 0.05}, &F, &G);
       Eigen::MatrixXd Fx = Eigen::MatrixXd::Identity(ref.P.rows(), ref.P.cols());
       Fx.topLeftCorner<3, 3>() = F;
       Eigen::MatrixXd GQG = Eigen::MatrixXd::Zero(ref.P.rows(), ref.P.cols());
@@ -296,8 +295,8 @@ TEST_CASE("float SLAM over the whole env1 run: P symmetric and positive definite
   host::SimStep s;
   int scans = 0, checked = 0, max_landmarks = 0;
   while (sim.step(s)) {  // <= the scenario's path
-    REQUIRE(step->predict(ekf::Odometry<float>{float(s.v_mps), float(s.w_radps), float(sc.dt_s),
-                                               float(sc.sigma_v_mps), float(sc.sigma_w_radps)}) == Status::kOk);
+    REQUIRE(step->predict(ekf::Odometry<float>{float(s.v_mps), float(s.w_radps), float(sc.dt_s), float(sc.sigma_v_mps),
+                                               float(sc.sigma_w_radps)}) == Status::kOk);
     if (!s.scan) continue;
     obs->clear();
     for (const auto& o : s.observations) {
@@ -319,8 +318,7 @@ TEST_CASE("float SLAM over the whole env1 run: P symmetric and positive definite
     Eigen::LLT<Eigen::MatrixXf> llt(P);
     CHECK(llt.info() == Eigen::Success);
   }
-  MESSAGE("env1 float: " << scans << " scans, " << checked << " dense checks, up to " << max_landmarks
-                         << " landmarks");
+  MESSAGE("env1 float: " << scans << " scans, " << checked << " dense checks, up to " << max_landmarks << " landmarks");
   CHECK(scans > 500);
   CHECK(max_landmarks > 50);
 }

@@ -22,7 +22,7 @@ using LB = Bounds<8, 16, 3, 2000, 16>;
 template <typename T>
 struct Rig {
   Slam<T, LB> slam;
-  ekf::Workspace<T, LB> ws;
+  ekf::SlamWorkspace<T, LB> ws;
   Observations<T, LB> obs;
   Association<T, LB> assoc;
   Prediction<T, LB> pred;
@@ -182,7 +182,8 @@ TEST_CASE_TEMPLATE("known landmarks: added uncorrelated with their covariance; b
   CHECK(r->slam.add_known_landmark(Vec2<T>(nan, T(1)), Pll, id) == Status::kNonFinite);
   CHECK(r->slam.add_known_landmark(Vec2<T>(T(1), T(1)), Mat2<T>::Zero(), id) == Status::kNotPositiveDefinite);
   CHECK(std::memcmp(before.get(), &r->slam, sizeof(Slam<T, LB>)) == 0);
-  for (int k = 1; k < LB::kMaxLandmarks; ++k) REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(k), T(2)), Pll, id) == Status::kOk);
+  for (int k = 1; k < LB::kMaxLandmarks; ++k)
+    REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(k), T(2)), Pll, id) == Status::kOk);
   CHECK(r->slam.add_known_landmark(Vec2<T>(T(1), T(1)), Pll, id) == Status::kCapacityExceeded);
   // A bad policy (the new rules' fields out of range) is refused before anything changes.
   LocalMapStats st;

@@ -28,7 +28,7 @@ using EB = Bounds<16, 24, 5, 1000, 40>;
 template <typename T>
 struct Fixture {
   Slam<T, EB> slam;
-  ekf::Workspace<T, EB> ws;
+  ekf::SlamWorkspace<T, EB> ws;
   Observations<T, EB> obs;
   Association<T, EB> assoc;
   Prediction<T, EB> pred;
@@ -45,7 +45,7 @@ std::vector<Eigen::Vector2d> ring(int n, double radius) {
 }
 
 struct RunResult {
-  double pose_nees = 0;   ///< at the last step
+  double pose_nees = 0;  ///< at the last step
   double max_pose_error = 0;
   bool ok = true;
 };
@@ -59,15 +59,14 @@ RunResult run(Fixture<T>& f, const std::vector<Eigen::Vector2d>& world, int step
   std::normal_distribution<double> g(0, 1);
   const double sv = 0.05, sw = 0.02, sr = 0.05, sb = 0.01;
   Pose2<double> truth{0, -4, 0};
-  REQUIRE(f.slam.reset(Pose2<T>{T(truth.x), T(truth.y), T(truth.theta)}, Mat3<T>::Identity() * T(1e-9)) ==
-          Status::kOk);
+  REQUIRE(f.slam.reset(Pose2<T>{T(truth.x), T(truth.y), T(truth.theta)}, Mat3<T>::Identity() * T(1e-9)) == Status::kOk);
   std::vector<int> id_of(world.size(), -1);
   RunResult res;
   for (int k = 0; k < steps; ++k) {
     Odometry<double> u{1.0, 0.25, 0.1, sv, sw};
     truth = move(truth, u);
-    Odometry<T> un{T(u.v_mps + noise_scale * sv * g(rng)), T(u.w_radps + noise_scale * sw * g(rng)), T(u.dt_s),
-                   T(sv), T(sw)};
+    Odometry<T> un{T(u.v_mps + noise_scale * sv * g(rng)), T(u.w_radps + noise_scale * sw * g(rng)), T(u.dt_s), T(sv),
+                   T(sw)};
     REQUIRE(f.slam.predict(un) == Status::kOk);
     f.obs.clear();
     std::vector<int> seen;
@@ -327,13 +326,13 @@ TEST_CASE_TEMPLATE("review removes tentative landmarks that are missed, and keep
   CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kOk);
 }
 
-TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is removed; bad input changes nothing",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is removed; bad input changes nothing", T,
+                   float, double) {
   auto f = std::make_unique<Fixture<T>>();
   REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
   FeatureId id = -1;
-  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);     // ahead
-  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(2.5)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);   // behind
+  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);    // ahead
+  REQUIRE(f->slam.augment(Vec2<T>(T(4), T(2.5)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);  // behind
   LocalMapStats st;
   REQUIRE(f->slam.predict_local(T(20), f->ws, f->pred, st) == Status::kOk);
   const Visibility<T> view{T(0.5), T(10), T(1.5)};

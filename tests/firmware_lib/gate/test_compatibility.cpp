@@ -36,8 +36,7 @@ TEST_CASE_TEMPLATE("a landmark at +179.5 deg observed at -179.5 deg is compatibl
   CHECK(p->out.d2[0] == doctest::Approx(deg * deg / T(0.02)).epsilon(1e-3));
 }
 
-TEST_CASE_TEMPLATE("the individual gate accepts d2 at the threshold and rejects just above", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("the individual gate accepts d2 at the threshold and rejects just above", T, float, double) {
   auto p = make_problem<T, DefaultBounds>();
   auto cfg = make_config<T, DefaultBounds>(SearchMethod::kIcnn, false, false);
   // Range innovation e with S_rr = 0.02: d2 = e^2 / 0.02. Put d2 at the threshold and 0.1 % over.
@@ -51,8 +50,7 @@ TEST_CASE_TEMPLATE("the individual gate accepts d2 at the threshold and rejects 
   CHECK(p->out.d2[0] > cfg.gate.individual);
 }
 
-TEST_CASE_TEMPLATE("local region keeps candidates with predicted range < r + d only (eq. 5)", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("local region keeps candidates with predicted range < r + d only (eq. 5)", T, float, double) {
   auto p = make_problem<T, DefaultBounds>();
   one_obs<T, DefaultBounds>(*p, Vec2<T>(T(9.9), T(0)),
                             {Vec2<T>(T(9.9), T(0)), Vec2<T>(T(10), T(0.5)), Vec2<T>(T(3), T(0))});
@@ -68,8 +66,8 @@ TEST_CASE_TEMPLATE("local region keeps candidates with predicted range < r + d o
   CHECK(p->out.feature[0] == kNewFeature);  // its only match is outside the region
 }
 
-TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new - compatible but left out is unmatched",
-                   T, float, double) {
+TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new - compatible but left out is unmatched", T, float,
+                   double) {
   auto p = make_problem<T, DefaultBounds>();
   // Two observations at the same spot, one candidate, mutual exclusion: one pairs, the other is
   // compatible but unpaired (unmatched); a third far away is new.

@@ -44,8 +44,7 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
       // Candidates 2 and 0: no joint test of this scene holds both, so only the full check reads it.
       {"C not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 0) += T(0.5); }, true},
-      {"C block indefinite", Status::kNotPositiveDefinite,
-       [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
+      {"C block indefinite", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
       {"C wrong size", Status::kInvalidInput,
        [&](auto& p, auto&) { p.pred.C.conservativeResize(2 * p.pred.count - 2, 2 * p.pred.count - 2); }},
       {"observations over capacity", Status::kCapacityExceeded,
@@ -60,7 +59,10 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"thresholds not set", Status::kInvalidInput,
        [&](auto&, auto& c) { c.gate = GateThresholds<T, B::kMaxObservations>{}; }},
       {"local radius NaN", Status::kInvalidInput,
-       [&](auto&, auto& c) { c.local_region = true; c.local_radius_m = nan; }},
+       [&](auto&, auto& c) {
+         c.local_region = true;
+         c.local_radius_m = nan;
+       }},
   };
   auto clean = std::make_unique<Problem<T, B>>(*base);
   std::memset(static_cast<void*>(&clean->out), 0x5A, sizeof(clean->out));
@@ -88,8 +90,7 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
   }
 }
 
-TEST_CASE_TEMPLATE("an indefinite C found in the joint test is reported, output untouched", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("an indefinite C found in the joint test is reported, output untouched", T, float, double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();
   // Two candidates whose 2x2 blocks are fine but whose cross block makes C indefinite, and R tiny.
@@ -132,8 +133,7 @@ TEST_CASE_TEMPLATE("empty input is not an error: an empty answer", T, float, dou
   }
 }
 
-TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: inside the region", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: inside the region", T, float, double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();
   p->obs.count = 1;
@@ -195,7 +195,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
       CAPTURE(seed);
       CAPTURE(preset);
       StrategyParams<T> params;
-      params.local_radius_m = T(100);  // every candidate in the region
+      params.local_radius_m = T(100);             // every candidate in the region
       params.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed (pairwise tests) on every scene
       AssociationConfig<T, B> cfg;
       REQUIRE(make_strategy(static_cast<Strategy>(preset), params, cfg) == Status::kOk);
@@ -224,8 +224,8 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
         bool mirror_only;  // corrupt one side only (asymmetry) or both (NaN / Inf on both sides)
         Status want;
       };
-      const Bad bads[] = {{nan, false, Status::kNonFinite}, {inf, true, Status::kNonFinite},
-                          {T(0.37), true, Status::kNotSymmetric}};
+      const Bad bads[] = {
+          {nan, false, Status::kNonFinite}, {inf, true, Status::kNonFinite}, {T(0.37), true, Status::kNotSymmetric}};
       for (const Bad& bad : bads) {
         for (int which = 0; which < 2; ++which) {
           const int a = which == 0 ? c1 : unread;
@@ -264,8 +264,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
   CHECK(unread_cases > 100);
 }
 
-TEST_CASE_TEMPLATE("the full covariance check and the check where read give the same answers", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("the full covariance check and the check where read give the same answers", T, float, double) {
   using B = DefaultBounds;
   for (std::uint64_t seed = 1; seed <= 30; ++seed) {
     host::SceneParams sp;

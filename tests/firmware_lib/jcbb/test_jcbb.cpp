@@ -24,8 +24,8 @@ host::SceneParams dense_params(int m, int n) {
 }
 }  // namespace
 
-TEST_CASE_TEMPLATE("the node budget is respected and flagged - the answer is still jointly compatible", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("the node budget is respected and flagged - the answer is still jointly compatible", T, float,
+                   double) {
   using B = DefaultBounds;
   int hits = 0;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
@@ -57,7 +57,7 @@ TEST_CASE_TEMPLATE("with a budget that suffices, the answer equals the unbudgete
     REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
     REQUIRE_FALSE(p->out.diag.node_budget_hit);
     const auto full = p->out;
-    cfg.node_budget = static_cast<int>(full.diag.jcbb_nodes);
+    cfg.node_budget = full.diag.jcbb_nodes;
     REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
     CHECK_FALSE(p->out.diag.node_budget_hit);
     CHECK(p->out.pairings == full.pairings);
@@ -65,8 +65,7 @@ TEST_CASE_TEMPLATE("with a budget that suffices, the answer equals the unbudgete
   }
 }
 
-TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation - off, two may share it", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation - off, two may share it", T, float, double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();
   // Two returns from one post (e.g. its two edges) and a single mapped feature.
@@ -116,8 +115,7 @@ TEST_CASE_TEMPLATE("ICNN takes each observation's nearest compatible candidate",
   }
 }
 
-TEST_CASE_TEMPLATE("incremental joint d2 equals a from-scratch solve, for any pairing order", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("incremental joint d2 equals a from-scratch solve, for any pairing order", T, float, double) {
   using B = DefaultBounds;
   std::mt19937_64 rng(5);
   for (std::uint64_t seed = 1; seed <= 50; ++seed) {
@@ -134,8 +132,7 @@ TEST_CASE_TEMPLATE("incremental joint d2 equals a from-scratch solve, for any pa
       const int j = static_cast<int>(rng() % p->pred.count);
       pairs.emplace_back(i, j);
       T d2 = 0;
-      REQUIRE(joint.try_push(p->pred.C, j, p->obs.R[i], innovation(p->obs.z[i], p->pred.h[j]), d2) ==
-              Status::kOk);
+      REQUIRE(joint.try_push(p->pred.C, j, p->obs.R[i], innovation(p->obs.z[i], p->pred.h[j]), d2) == Status::kOk);
       joint.commit();
       const long double want = o.joint_d2(pairs);
       CHECK(static_cast<long double>(d2) ==
@@ -145,8 +142,9 @@ TEST_CASE_TEMPLATE("incremental joint d2 equals a from-scratch solve, for any pa
     if (pairs.size() >= 2) {
       joint.pop();
       pairs.pop_back();
-      CHECK(static_cast<long double>(joint.d2()) ==
-            doctest::Approx(static_cast<double>(o.joint_d2(pairs))).epsilon(std::is_same<T, float>::value ? 2e-3 : 1e-9));
+      CHECK(
+          static_cast<long double>(joint.d2()) ==
+          doctest::Approx(static_cast<double>(o.joint_d2(pairs))).epsilon(std::is_same<T, float>::value ? 2e-3 : 1e-9));
     }
   }
 }

@@ -37,8 +37,7 @@ constexpr long double kMargin = std::is_same<T, float>::value ? 1e-3L : 1e-9L;
 
 }  // namespace
 
-TEST_CASE_TEMPLATE("JCBB equals the exhaustive oracle: max pairings, joint test, min d2", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("JCBB equals the exhaustive oracle: max pairings, joint test, min d2", T, float, double) {
   using B = SmallBounds;
   std::uint64_t borderline = 0, more_as_whole = 0, whole_checked = 0, nodes = 0;
   for (int combo = 0; combo < 8; ++combo) {
@@ -70,15 +69,15 @@ TEST_CASE_TEMPLATE("JCBB equals the exhaustive oracle: max pairings, joint test,
       CHECK(p->out.jointly_compatible);
       if (exclusion) {
         for (int a = 0; a < p->obs.count; ++a)
-          for (int b = a + 1; b < p->obs.count; ++b)
-            CHECK((hyp[a] < 0 || hyp[a] != hyp[b]));
+          for (int b = a + 1; b < p->obs.count; ++b) CHECK((hyp[a] < 0 || hyp[a] != hyp[b]));
       }
       const bool exact = !strict.saw_borderline() && !loose.saw_borderline();
       if (exact) {
         CHECK(p->out.pairings == rs.max_pairings);
         if (optimal) {
-          CHECK(static_cast<long double>(p->out.joint_d2) ==
-                doctest::Approx(static_cast<double>(rs.min_d2)).epsilon(static_cast<double>(kMargin<T> * 10)).scale(1e-6));
+          CHECK(static_cast<long double>(p->out.joint_d2) == doctest::Approx(static_cast<double>(rs.min_d2))
+                                                                 .epsilon(static_cast<double>(kMargin<T> * 10))
+                                                                 .scale(1e-6));
         }
       } else {
         ++borderline;
@@ -94,8 +93,7 @@ TEST_CASE_TEMPLATE("JCBB equals the exhaustive oracle: max pairings, joint test,
   std::printf(
       "[jcbb oracle, %s] %d problems: %llu borderline (a test value within %.0Le of its threshold), "
       "%llu/%llu with a hypothesis of more pairings that passes only as a whole, %.1f nodes/problem\n",
-      std::is_same<T, float>::value ? "float" : "double", 8 * kProblems,
-      static_cast<unsigned long long>(borderline), kMargin<T>,
-      static_cast<unsigned long long>(more_as_whole), static_cast<unsigned long long>(whole_checked),
+      std::is_same<T, float>::value ? "float" : "double", 8 * kProblems, static_cast<unsigned long long>(borderline),
+      kMargin<T>, static_cast<unsigned long long>(more_as_whole), static_cast<unsigned long long>(whole_checked),
       static_cast<double>(nodes) / (8 * kProblems));
 }

@@ -53,7 +53,7 @@ TEST_CASE_TEMPLATE("RJC: the same seed gives the same answer; the answer is join
         if (a->out.candidate[i] >= 0) CHECK(a->out.candidate[i] != a->out.candidate[k]);
     differing += a->out.diag.jcbb_nodes != c->out.diag.jcbb_nodes;
     // Every try's JCBB shares the budget.
-    CHECK(a->out.diag.jcbb_nodes <= static_cast<std::uint32_t>(a->obs.count == 0 ? 0 : B::kMaxJcbbNodes));
+    CHECK(a->out.diag.jcbb_nodes <= (a->obs.count == 0 ? NodeCount{0} : B::kMaxJcbbNodes));
   }
   CHECK(differing > 0);  // another seed draws other subsets
 }

@@ -171,8 +171,8 @@ TEST_CASE_TEMPLATE("the re-check repairs unions that fail the joint test", T, fl
   CHECK(repaired == failing_without);
 }
 
-TEST_CASE_TEMPLATE("conditioned groups: the union is jointly compatible by construction, exclusion holds", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("conditioned groups: the union is jointly compatible by construction, exclusion holds", T, float,
+                   double) {
   using B = DefaultBounds;
   std::mt19937_64 rng(81);
   for (int k = 0; k < 200; ++k) {

@@ -12,8 +12,8 @@
 namespace geojcbb {
 
 struct DbscanStats {
-  int clusters = 0;        ///< density clusters found
-  int noise = 0;           ///< noise points (each its own group)
+  int clusters = 0;                  ///< density clusters found
+  int noise = 0;                     ///< noise points (each its own group)
   bool merged_for_capacity = false;  ///< groups beyond MaxGroups were merged into the last
 };
 
@@ -40,7 +40,7 @@ DbscanStats dbscan(const Points<T, B>& pts, int m, T eps, int min_points, Groups
     while (head < tail) {  // each point is queued at most once: <= kMaxObservations
       const int p = queue[head++];
       if (neighbours[p] < min_points) continue;  // border point: does not expand
-      for (int q = 0; q < m; ++q) {  // <= kMaxObservations
+      for (int q = 0; q < m; ++q) {              // <= kMaxObservations
         if (raw[q] < 0 && (pts[p] - pts[q]).squaredNorm() <= eps2) {
           raw[q] = c;
           queue[tail++] = static_cast<std::int8_t>(q);

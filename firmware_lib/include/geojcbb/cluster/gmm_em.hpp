@@ -24,12 +24,12 @@ namespace geojcbb {
 
 template <typename T>
 struct EmStats {
-  int components = 0;     ///< components of the chosen fit
-  int iterations = 0;     ///< EM iterations of the chosen fit
+  int components = 0;        ///< components of the chosen fit
+  int iterations = 0;        ///< EM iterations of the chosen fit
   int total_iterations = 0;  ///< over every fit (BIC tries several K)
-  bool converged = false; ///< the chosen fit met its stop rule before the iteration bound
-  T objective = T(0);     ///< Q of the chosen fit
-  T log_likelihood = T(0);  ///< LL (eq. 10) of the chosen fit
+  bool converged = false;    ///< the chosen fit met its stop rule before the iteration bound
+  T objective = T(0);        ///< Q of the chosen fit
+  T log_likelihood = T(0);   ///< LL (eq. 10) of the chosen fit
 };
 
 /// The EM state, exposed for tests (objective trace) and reuse across BIC fits.
@@ -43,7 +43,7 @@ struct EmWorkspace {
   std::array<std::array<T, K>, B::kMaxObservations> gamma;
   std::array<T, kMaxEmIterations + 1> trace;  ///< Q after each E-step
   int trace_length = 0;
-  T ll = T(0);  ///< LL (eq. 10) at the last E-step
+  T ll = T(0);                                         ///< LL (eq. 10) at the last E-step
   std::array<std::int8_t, B::kMaxObservations> label;  ///< arg max gamma at the last E-step
   bool hard = false;  ///< at the last E-step every point's largest gamma was >= 1 - hard_margin
   // E-step scratch, here rather than in e_step's frame: on the Cortex-M4F the chain associate ->
@@ -54,8 +54,10 @@ struct EmWorkspace {
 
 namespace em_detail {
 
-template <typename T> constexpr T kLog2Pi = T(1.8378770664093454836);
-template <typename T> constexpr T kMinComponentWeight = T(1e-3);
+template <typename T>
+constexpr T kLog2Pi = T(1.8378770664093454836);
+template <typename T>
+constexpr T kMinComponentWeight = T(1e-3);
 
 /// E-step: responsibilities, their arg max (eq. 9) and Q; returns how many labels changed.
 /// Bound: m * k.
@@ -168,7 +170,7 @@ EmStats<T> fit(const Points<T, B>& pts, int m, int k, const EmOptions<T>& opt, c
   int changed = e_step(pts, m, floor, opt.hard_margin, ws, q_old);
   ws.trace[ws.trace_length++] = q_old;
   int stable = changed == 0 && ws.k == k_before && ws.hard ? 1 : 0;
-  for (int it = 0; it < opt.max_iterations; ++it) {  // <= kMaxEmIterations
+  for (int it = 0; it < opt.max_iterations; ++it) {      // <= kMaxEmIterations
     if (by_groups && stable >= opt.stable_iterations) {  // the start's groups came out unchanged
       st.converged = true;
       break;
@@ -207,7 +209,8 @@ EmStats<T> gmm_em(const Points<T, B>& pts, int m, int k, EmOptions<T> opt, EmWor
     out.count = 0;
     return best;
   }
-  opt.max_iterations = opt.max_iterations < 1 ? 1 : (opt.max_iterations > kMaxEmIterations ? kMaxEmIterations : opt.max_iterations);
+  opt.max_iterations =
+      opt.max_iterations < 1 ? 1 : (opt.max_iterations > kMaxEmIterations ? kMaxEmIterations : opt.max_iterations);
   opt.stable_iterations = opt.stable_iterations < 1 ? 1 : opt.stable_iterations;
   const int k_cap = m < B::kMaxGroups ? m : B::kMaxGroups;
   const bool by_bic = k <= 0;

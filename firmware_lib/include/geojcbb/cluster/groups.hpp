@@ -17,7 +17,7 @@ namespace geojcbb {
 
 template <class B>
 struct Groups {
-  int count = 0;                                    ///< groups, 1 .. MaxGroups (0 for no points)
+  int count = 0;                                       ///< groups, 1 .. MaxGroups (0 for no points)
   std::array<std::int8_t, B::kMaxObservations> label;  ///< observation -> group, 0 .. count - 1
 };
 

@@ -20,7 +20,7 @@ KMeansStats kmeans(const Points<T, B>& pts, int m, int k, int max_iterations, Gr
   KMeansStats st;
   std::array<Vec2<T>, B::kMaxGroups> c;
   int kc = farthest_first<T, B>(pts, m, k, c);
-  for (int i = 0; i < m; ++i) out.label[i] = -1;  // <= kMaxObservations
+  for (int i = 0; i < m; ++i) out.label[i] = -1;           // <= kMaxObservations
   for (int it = 0; it < max_iterations && kc > 0; ++it) {  // <= kMaxKMeansIterations
     st.iterations = it + 1;
     bool changed = false;
@@ -48,7 +48,7 @@ KMeansStats kmeans(const Points<T, B>& pts, int m, int k, int max_iterations, Gr
       sum[out.label[i]] += pts[i];
       ++n[out.label[i]];
     }
-    int kept = 0;  // drop emptied clusters; labels are recomputed next iteration
+    int kept = 0;                   // drop emptied clusters; labels are recomputed next iteration
     for (int q = 0; q < kc; ++q) {  // <= kMaxGroups
       if (n[q] > 0) c[kept++] = sum[q] / static_cast<T>(n[q]);
     }

@@ -32,7 +32,7 @@ template <class B>
 struct ConsistencyResult {
   int count = 0;  ///< equals the number of observations
   /// Per observation: the candidate (index into the Prediction) of the clique's pairing, or -1.
-  std::array<std::int16_t, B::kMaxObservations> candidate;
+  Hypothesis<B> candidate;
   int pairings = 0;
   ConsistencyDiagnostics diag;
 };
@@ -69,8 +69,7 @@ template <typename T, class B, int MaxNodes>
 /// The clique in ws (after clique_of_validated or consistent_subset) as a hypothesis: per
 /// observation its candidate, or -1.
 template <typename T, class B, int MaxNodes>
-void clique_hypothesis(const ConsistencyWorkspace<T, B, MaxNodes>& ws, int m,
-                       std::array<std::int16_t, B::kMaxObservations>& hyp) {
+void clique_hypothesis(const ConsistencyWorkspace<T, B, MaxNodes>& ws, int m, Hypothesis<B>& hyp) {
   for (int i = 0; i < m; ++i) hyp[i] = -1;       // <= kMaxObservations
   for (int x = 0; x < ws.pairings.count; ++x) {  // <= MaxNodes
     if (ws.clique.members.test(x)) hyp[ws.pairings.node[x].obs] = ws.pairings.node[x].cand;
@@ -99,8 +98,7 @@ ConsistencyDiagnostics clique_diagnostics(const ConsistencyWorkspace<T, B, MaxNo
 /// @return kOk; kNotPositiveDefinite from the graph (C not PSD).
 template <typename T, class B, int MaxNodes>
 [[nodiscard]] Status consistent_subset(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                       const ConsistencyOptions<T>& opt,
-                                       const std::array<std::int16_t, B::kMaxObservations>& hyp,
+                                       const ConsistencyOptions<T>& opt, const Hypothesis<B>& hyp,
                                        ConsistencyWorkspace<T, B, MaxNodes>& ws) {
   static_assert(B::kMaxObservations <= MaxNodes, "a hypothesis must fit the verification graph");
   ws.geometry.prepare(obs, pred);
@@ -155,8 +153,7 @@ T least_position_variance(const ConsistencyWorkspace<T, B, MaxNodes>& ws, const 
 ///         (also when C's off-diagonal blocks make a distance variance negative).
 template <typename T, class B, int MaxNodes>
 [[nodiscard]] Status consistent_hypothesis(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                           const ConsistencyOptions<T>& opt,
-                                           ConsistencyWorkspace<T, B, MaxNodes>& ws,
+                                           const ConsistencyOptions<T>& opt, ConsistencyWorkspace<T, B, MaxNodes>& ws,
                                            ConsistencyResult<B>& out) {
   if (obs.count > B::kMaxObservations || pred.count > B::kMaxCandidates) return Status::kCapacityExceeded;
   if (obs.count < 0 || pred.count < 0) return Status::kInvalidInput;

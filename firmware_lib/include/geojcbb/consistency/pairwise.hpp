@@ -45,10 +45,10 @@ struct PairingList {
 /// The distance test of two pairings, with its parts (for tests and diagnostics).
 template <typename T>
 struct PairStatistic {
-  T observed_m = T(0);    ///< |p_i - p_k|
-  T predicted_m = T(0);   ///< |q_a - q_b|
-  T var_observed = T(0);  ///< first-order variance of observed_m [m^2]
-  T var_predicted = T(0); ///< first-order variance of predicted_m [m^2] (pose-free)
+  T observed_m = T(0);     ///< |p_i - p_k|
+  T predicted_m = T(0);    ///< |q_a - q_b|
+  T var_observed = T(0);   ///< first-order variance of observed_m [m^2]
+  T var_predicted = T(0);  ///< first-order variance of predicted_m [m^2] (pose-free)
   /// (observed - predicted)^2 / (var_observed + var_predicted); 0 or infinity when the variance is 0.
   T d2() const {
     const T e = observed_m - predicted_m;
@@ -104,8 +104,8 @@ T norm_variance(const Vec2<T>& d, const Mat2<T>& S, T norm) {
 ///         kNotPositiveDefinite when C's blocks of a and b make Sigma_v's variance negative beyond
 ///         rounding (C not PSD).
 template <typename T, class B>
-[[nodiscard]] Status pair_statistic(const PairwiseGeometry<T, B>& geo, const Prediction<T, B>& pred, int i,
-                                    int a, int k, int b, PairStatistic<T>& out) {
+[[nodiscard]] Status pair_statistic(const PairwiseGeometry<T, B>& geo, const Prediction<T, B>& pred, int i, int a,
+                                    int k, int b, PairStatistic<T>& out) {
   for (int r = 0; r < 2; ++r) {
     for (int c = 0; c < 2; ++c) {
       const Status s = check_mirrored(pred.C(2 * a + r, 2 * b + c), pred.C(2 * b + c, 2 * a + r));
@@ -141,14 +141,14 @@ template <typename T, class B>
 /// Bounds: m n gate tests; on overflow, an insertion of <= MaxNodes steps per further pairing and a
 /// final insertion sort of MaxNodes entries.
 template <typename T, class B, int MaxNodes>
-void select_pairings(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                     const ConsistencyOptions<T>& opt, PairingList<T, MaxNodes>& list) {
+void select_pairings(const Observations<T, B>& obs, const Prediction<T, B>& pred, const ConsistencyOptions<T>& opt,
+                     PairingList<T, MaxNodes>& list) {
   list.count = 0;
   list.offered = 0;
   list.truncated = false;
   // Sorted by (d2, i, a) once the list overflows; a later pairing has a larger (i, a).
   auto before = [](const Pairing<T>& x, const Pairing<T>& y) { return x.d2 < y.d2; };
-  for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+  for (int i = 0; i < obs.count; ++i) {     // <= kMaxObservations
     for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       if (!opt.in_region(pred.h[a])) continue;
       const Mat2<T> S = pred.C.template block<2, 2>(2 * a, 2 * a) + obs.R[i];

@@ -92,15 +92,15 @@ struct AssociationConfig {
   /// Used by JCBB without grouping when more than rjc_subset observations have a compatible
   /// candidate (smaller scans get plain JCBB). Not with an ambiguity margin (no runner-up).
   bool rjc = false;
-  int rjc_tries = 8;            ///< 1 .. kMaxRjcTries; each try gets node_budget / rjc_tries nodes
-  int rjc_subset = 8;           ///< 1 .. MaxObservations
-  std::uint64_t rjc_seed = 1;   ///< the same inputs and seed give the same answer
+  int rjc_tries = 8;           ///< 1 .. kMaxRjcTries; each try gets node_budget / rjc_tries nodes
+  int rjc_subset = 8;          ///< 1 .. MaxObservations
+  std::uint64_t rjc_seed = 1;  ///< the same inputs and seed give the same answer
   /// Search observations with the fewest compatible candidates first (smaller tree, same answer).
   bool order_fewest_candidates_first = true;
   /// Interpretation-tree nodes per scan, shared by every group's search, 1 .. B::kMaxJcbbNodes.
   /// The re-check's repair search may add up to 2 * MaxObservations more.
-  int node_budget = B::kMaxJcbbNodes;
-  GateThresholds<T, B::kMaxObservations> gate;  ///< set with GateThresholds::from_confidence
+  NodeCount node_budget = B::kMaxJcbbNodes;
+  GateThresholds<T, B::kMaxObservations> gate;                     ///< set with GateThresholds::from_confidence
   CovarianceCheck covariance_check = CovarianceCheck::kWhereRead;  ///< see CovarianceCheck
 };
 

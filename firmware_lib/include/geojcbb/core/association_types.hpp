@@ -22,6 +22,13 @@ constexpr FeatureId kNewFeature = -1;
 /// (ambiguous): neither paired nor safe to add as a new landmark.
 constexpr FeatureId kUnmatched = -2;
 
+/// Index of a candidate in a Prediction (0 .. MaxCandidates - 1), or -1 for none.
+using CandidateIndex = std::int16_t;
+/// A hypothesis: per observation, the index of its paired candidate or -1. Every stage (JCBB, ICNN,
+/// the merge, the consistency stage) reads and writes hypotheses in this one form.
+template <class B>
+using Hypothesis = std::array<CandidateIndex, B::kMaxObservations>;
+
 template <typename T, class B>
 struct Observations {
   int count = 0;
@@ -46,36 +53,36 @@ using JointCovariance =
 
 template <typename T, class B>
 struct Prediction {
-  int count = 0;                                       ///< n candidate features
-  std::array<FeatureId, B::kMaxCandidates> id;         ///< map feature ids (>= 0)
-  std::array<Vec2<T>, B::kMaxCandidates> h;            ///< predicted (range [m], bearing [rad])
-  JointCovariance<T, B> C;                             ///< H P H^T, 2n x 2n, candidate j at rows 2j, 2j+1
+  int count = 0;                                ///< n candidate features
+  std::array<FeatureId, B::kMaxCandidates> id;  ///< map feature ids (>= 0)
+  std::array<Vec2<T>, B::kMaxCandidates> h;     ///< predicted (range [m], bearing [rad])
+  JointCovariance<T, B> C;                      ///< H P H^T, 2n x 2n, candidate j at rows 2j, 2j+1
 };
 
 /// Per-call counters (as MAVLink keeps mavlink_status_t).
 struct AssociationDiagnostics {
-  std::uint32_t jcbb_nodes = 0;          ///< interpretation-tree nodes expanded
+  NodeCount jcbb_nodes = 0;                ///< interpretation-tree nodes expanded
   std::uint16_t candidates_in_region = 0;  ///< candidates left after the local region (eq. 5)
-  std::uint16_t compatible_pairs = 0;    ///< (observation, candidate) pairs passing the individual gate
-  bool node_budget_hit = false;          ///< JCBB stopped at its node budget: best-so-far returned
-  std::uint8_t groups = 0;               ///< observation groups searched
-  std::uint16_t cluster_iterations = 0;  ///< k-means or EM iterations (EM: over every BIC fit)
+  std::uint16_t compatible_pairs = 0;      ///< (observation, candidate) pairs passing the individual gate
+  bool node_budget_hit = false;            ///< JCBB stopped at its node budget: best-so-far returned
+  std::uint8_t groups = 0;                 ///< observation groups searched
+  std::uint16_t cluster_iterations = 0;    ///< k-means or EM iterations (EM: over every BIC fit)
   /// The clustering stopped at its iteration bound before converging (k-means, EM), or DBSCAN
   /// merged groups beyond MaxGroups.
   bool cluster_bound_hit = false;
-  std::uint16_t merge_conflicts = 0;     ///< features claimed by two groups (mutual exclusion)
-  bool recheck_failed = false;           ///< the merged union failed the joint test and was repaired
-  std::uint16_t recheck_dropped = 0;     ///< pairings the repair removed
-  std::uint16_t declined = 0;            ///< pairings left kUnmatched as ambiguous (ambiguity_margin)
-  std::uint16_t verify_dropped = 0;      ///< pairings the verification dropped (not pairwise consistent)
-  bool seed_tried = false;               ///< the pose was uncertain: the pose-free clique was computed
-  bool seed_used = false;                ///< the clique passed the joint test and seeded the search
-  std::uint16_t seed_pairings = 0;       ///< pairings of the clique (when tried)
-  std::uint16_t clique_graph_nodes = 0;  ///< graph nodes of the last consistency graph (seed or verify)
-  std::uint32_t clique_search_nodes = 0; ///< max-clique search nodes, seed and verify together
-  bool clique_budget_hit = false;        ///< a max-clique search stopped at its budget (best so far used)
-  bool clique_nodes_truncated = false;   ///< the seed's wide gate passed more pairings than graph nodes
-  bool rjc_used = false;                 ///< the scan was searched by RJC (cfg.rjc and a large scan)
+  std::uint16_t merge_conflicts = 0;      ///< features claimed by two groups (mutual exclusion)
+  bool recheck_failed = false;            ///< the merged union failed the joint test and was repaired
+  std::uint16_t recheck_dropped = 0;      ///< pairings the repair removed
+  std::uint16_t declined = 0;             ///< pairings left kUnmatched as ambiguous (ambiguity_margin)
+  std::uint16_t verify_dropped = 0;       ///< pairings the verification dropped (not pairwise consistent)
+  bool seed_tried = false;                ///< the pose was uncertain: the pose-free clique was computed
+  bool seed_used = false;                 ///< the clique passed the joint test and seeded the search
+  std::uint16_t seed_pairings = 0;        ///< pairings of the clique (when tried)
+  std::uint16_t clique_graph_nodes = 0;   ///< graph nodes of the last consistency graph (seed or verify)
+  std::uint32_t clique_search_nodes = 0;  ///< max-clique search nodes, seed and verify together
+  bool clique_budget_hit = false;         ///< a max-clique search stopped at its budget (best so far used)
+  bool clique_nodes_truncated = false;    ///< the seed's wide gate passed more pairings than graph nodes
+  bool rjc_used = false;                  ///< the scan was searched by RJC (cfg.rjc and a large scan)
 };
 
 template <typename T, class B>
@@ -88,9 +95,9 @@ struct Association {
   /// Per observation: individual d2 of its pair; when unpaired, the smallest d2 to any candidate in
   /// the region (infinity when there is none), which a filter can use as a second gate.
   std::array<T, B::kMaxObservations> d2;
-  int pairings = 0;               ///< number of paired observations
-  T joint_d2 = T(0);              ///< joint Mahalanobis distance of the hypothesis (eq. 4)
-  bool jointly_compatible = true; ///< the hypothesis passes the joint test at its size
+  int pairings = 0;                ///< number of paired observations
+  T joint_d2 = T(0);               ///< joint Mahalanobis distance of the hypothesis (eq. 4)
+  bool jointly_compatible = true;  ///< the hypothesis passes the joint test at its size
   AssociationDiagnostics diag;
 };
 

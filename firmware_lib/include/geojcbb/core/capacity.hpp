@@ -3,19 +3,25 @@
 // 128 KiB RAM); the host instantiates larger ones for benchmarks.
 #pragma once
 
+#include <cstdint>
+
 namespace geojcbb {
+
+/// The one type of every JCBB node count and budget: CONFIG's node_budget on the wire, the
+/// strategy's and the association's options, the search's counter and the diagnostics.
+using NodeCount = std::uint32_t;
 
 /// @tparam MaxObservations  observations in one scan (M)
 /// @tparam MaxCandidates    map features offered to one association call (n, after the local region)
 /// @tparam MaxGroups        observation groups (clustering, issue 3)
 /// @tparam MaxJcbbNodes     JCBB interpretation-tree nodes per scan (the worst-case cost of a scan)
 /// @tparam MaxLandmarks     landmarks in the EKF map
-template <int MaxObservations, int MaxCandidates, int MaxGroups, int MaxJcbbNodes, int MaxLandmarks>
+template <int MaxObservations, int MaxCandidates, int MaxGroups, NodeCount MaxJcbbNodes, int MaxLandmarks>
 struct Bounds {
   static constexpr int kMaxObservations = MaxObservations;
   static constexpr int kMaxCandidates = MaxCandidates;
   static constexpr int kMaxGroups = MaxGroups;
-  static constexpr int kMaxJcbbNodes = MaxJcbbNodes;
+  static constexpr NodeCount kMaxJcbbNodes = MaxJcbbNodes;
   static constexpr int kMaxLandmarks = MaxLandmarks;
   /// Rows of a joint innovation: two per pairing, at most one pairing per observation.
   static constexpr int kMaxJointRows = 2 * MaxObservations;

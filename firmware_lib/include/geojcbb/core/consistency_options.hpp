@@ -17,7 +17,7 @@ namespace geojcbb {
 
 /// Which (observation, candidate) pairings become nodes of the consistency graph.
 enum class PairingGate : std::uint8_t {
-  kWide,          ///< individual d2 <= wide_d2 (the individual gate at a much higher confidence)
+  kWide,            ///< individual d2 <= wide_d2 (the individual gate at a much higher confidence)
   kEveryCandidate,  ///< every candidate in the local region (all when the region is off): no pose trust
 };
 

@@ -113,9 +113,8 @@ inline float atan_nonneg(float x) {
     x = (x - 1.0f) / (x + 1.0f);
   }
   const float z = x * x;
-  return y0 + ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z *
-                   x +
-               x);
+  return y0 +
+         ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * x + x);
 }
 
 /// atan2(y, x) in [-pi, pi], with the C library's conventions for zeros (signs kept) and
@@ -146,9 +145,12 @@ inline float exp(float x) {
   const float fn = static_cast<float>(n);
   const float r = (x - fn * 0.693359375f) - fn * -2.12194440e-4f;
   const float z = r * r;
-  const float p =
-      (((((1.9875691500e-4f * r + 1.3981999507e-3f) * r + 8.3334519073e-3f) * r + 4.1665795894e-2f) * r +
-        1.6666665459e-1f) * r + 5.0000001201e-1f) * z + r + 1.0f;
+  const float p = (((((1.9875691500e-4f * r + 1.3981999507e-3f) * r + 8.3334519073e-3f) * r + 4.1665795894e-2f) * r +
+                    1.6666665459e-1f) *
+                       r +
+                   5.0000001201e-1f) *
+                      z +
+                  r + 1.0f;
   // 2^n in two factors so n = 128 (x just under 88.72) and n = -126 stay representable.
   const int h = n / 2;
   const float s1 = detail::from_bits(static_cast<std::uint32_t>(h + 127) << 23);
@@ -161,7 +163,7 @@ inline float log(float x) {
   if (!(x > 0.0f) || std::isinf(x)) return std::log(x);  // 0, negative, NaN, inf: exact cases
   int e = 0;
   if (x < std::numeric_limits<float>::min()) {  // subnormal: scale into the normal range
-    x *= 8388608.0f;                             // 2^23
+    x *= 8388608.0f;                            // 2^23
     e = -23;
   }
   const std::uint32_t u = detail::to_bits(x);
@@ -175,8 +177,16 @@ inline float log(float x) {
   }
   const float z = m * m;
   float y = ((((((((7.0376836292e-2f * m - 1.1514610310e-1f) * m + 1.1676998740e-1f) * m - 1.2420140846e-1f) * m +
-                 1.4249322787e-1f) * m - 1.6668057665e-1f) * m + 2.0000714765e-1f) * m - 2.4999993993e-1f) * m +
-             3.3333331174e-1f) * m * z;
+                 1.4249322787e-1f) *
+                    m -
+                1.6668057665e-1f) *
+                   m +
+               2.0000714765e-1f) *
+                  m -
+              2.4999993993e-1f) *
+                 m +
+             3.3333331174e-1f) *
+            m * z;
   const float fe = static_cast<float>(e);
   y += -2.12194440e-4f * fe;
   y += -0.5f * z;

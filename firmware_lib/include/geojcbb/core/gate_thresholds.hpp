@@ -20,8 +20,7 @@ struct GateThresholds {
 
   /// Thresholds from confidence levels, e.g. 0.99 and 0.99 (chi2inv(p, dof)).
   /// @return kOk; kInvalidInput for a level outside (0, 1); kNoConvergence from chi2_inv.
-  [[nodiscard]] static Status from_confidence(double individual_p, double joint_p,
-                                              GateThresholds& out) {
+  [[nodiscard]] static Status from_confidence(double individual_p, double joint_p, GateThresholds& out) {
     GateThresholds g;
     double v = 0.0;
     Status s = chi2_inv(individual_p, 2, v);

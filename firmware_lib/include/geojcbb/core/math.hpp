@@ -12,15 +12,23 @@
 
 namespace geojcbb {
 
-template <typename T> using Vec2 = Eigen::Matrix<T, 2, 1>;
-template <typename T> using Vec3 = Eigen::Matrix<T, 3, 1>;
-template <typename T> using Mat2 = Eigen::Matrix<T, 2, 2>;
-template <typename T> using Mat3 = Eigen::Matrix<T, 3, 3>;
-template <typename T> using Mat23 = Eigen::Matrix<T, 2, 3>;
-template <typename T> using Mat32 = Eigen::Matrix<T, 3, 2>;
+template <typename T>
+using Vec2 = Eigen::Matrix<T, 2, 1>;
+template <typename T>
+using Vec3 = Eigen::Matrix<T, 3, 1>;
+template <typename T>
+using Mat2 = Eigen::Matrix<T, 2, 2>;
+template <typename T>
+using Mat3 = Eigen::Matrix<T, 3, 3>;
+template <typename T>
+using Mat23 = Eigen::Matrix<T, 2, 3>;
+template <typename T>
+using Mat32 = Eigen::Matrix<T, 3, 2>;
 
-template <typename T> constexpr T kPi = T(3.14159265358979323846264338327950288L);
-template <typename T> constexpr T kTwoPi = T(6.28318530717958647692528676655900577L);
+template <typename T>
+constexpr T kPi = T(3.14159265358979323846264338327950288L);
+template <typename T>
+constexpr T kTwoPi = T(6.28318530717958647692528676655900577L);
 
 /// Wraps an angle into (-pi, pi]. Inputs already in range return unchanged (the common case for
 /// innovations); others go through std::remainder (no loop).
@@ -39,13 +47,13 @@ bool all_finite(const Eigen::MatrixBase<Derived>& m) {
 
 /// Relative tolerance for "symmetric" and "positive" checks on covariances computed in Scalar T:
 /// products like H P H^T carry rounding of a few hundred ulps.
-template <typename T> constexpr T kCovarianceTolerance = T(1024) * std::numeric_limits<T>::epsilon();
+template <typename T>
+constexpr T kCovarianceTolerance = T(1024) * std::numeric_limits<T>::epsilon();
 
 /// True when |a - b| is within rounding of their magnitudes.
 template <typename T>
 bool nearly_equal(T a, T b) {
-  return std::abs(a - b) <= kCovarianceTolerance<T> * (std::abs(a) + std::abs(b)) +
-                                std::numeric_limits<T>::min();
+  return std::abs(a - b) <= kCovarianceTolerance<T> * (std::abs(a) + std::abs(b)) + std::numeric_limits<T>::min();
 }
 
 /// One entry of C and its mirror image, as read by a stage: both finite and equal within rounding.

@@ -23,8 +23,7 @@ struct Pose2 {
 /// @param[out] J_z_landmark  2x2 Jacobian with respect to (l_x, l_y); may be null
 /// Precondition: the landmark is not at the robot's position (range > 0); the caller gates on that.
 template <typename T>
-Vec2<T> observe(const Pose2<T>& x_r, const Vec2<T>& l, Mat23<T>* J_z_pose = nullptr,
-                Mat2<T>* J_z_landmark = nullptr) {
+Vec2<T> observe(const Pose2<T>& x_r, const Vec2<T>& l, Mat23<T>* J_z_pose = nullptr, Mat2<T>* J_z_landmark = nullptr) {
   const T dx = l.x() - x_r.x;
   const T dy = l.y() - x_r.y;
   const T q = dx * dx + dy * dy;
@@ -55,8 +54,7 @@ Vec2<T> innovation(const Vec2<T>& z, const Vec2<T>& h) {
 /// @param[out] J_l_pose  2x3 Jacobian with respect to (x, y, theta); may be null
 /// @param[out] J_l_z     2x2 Jacobian with respect to (range, bearing); may be null
 template <typename T>
-Vec2<T> inverse_observe(const Pose2<T>& x_r, const Vec2<T>& z, Mat23<T>* J_l_pose = nullptr,
-                        Mat2<T>* J_l_z = nullptr) {
+Vec2<T> inverse_observe(const Pose2<T>& x_r, const Vec2<T>& z, Mat23<T>* J_l_pose = nullptr, Mat2<T>* J_l_z = nullptr) {
   const T a = x_r.theta + z.y();
   const T c = fmath::cos(a);
   const T s = fmath::sin(a);

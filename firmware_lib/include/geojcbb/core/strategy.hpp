@@ -45,11 +45,11 @@ struct StrategyParams {
   T dbscan_eps_m = T(1.5);
   int dbscan_min_points = 2;
   bool joint_recheck = true;
-  bool condition_groups = false;  ///< our conditioned group search (AssociationConfig)
-  int node_budget = 0;       ///< 0: the capacity's MaxJcbbNodes
-  double ambiguity_margin = 0;  ///< AssociationConfig::ambiguity_margin (0: off)
+  bool condition_groups = false;         ///< our conditioned group search (AssociationConfig)
+  NodeCount node_budget = 0;             ///< 0: the capacity's MaxJcbbNodes
+  double ambiguity_margin = 0;           ///< AssociationConfig::ambiguity_margin (0: off)
   bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
-  bool verify = false;  ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
+  bool verify = false;                   ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
   /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
   /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
   bool full_covariance_check = false;
@@ -80,7 +80,7 @@ template <typename T, class B>
   consistency.wide_d2 = p.consistency_wide_d2;
   consistency.pair_d2 = p.consistency_pair_d2;
   if (!consistency.valid()) return Status::kInvalidInput;
-  if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget < 0 || p.node_budget > B::kMaxJcbbNodes) {
+  if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget > B::kMaxJcbbNodes) {
     return Status::kInvalidInput;
   }
   const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;

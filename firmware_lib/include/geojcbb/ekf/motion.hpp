@@ -12,11 +12,11 @@ namespace geojcbb::ekf {
 /// One odometry interval.
 template <typename T>
 struct Odometry {
-  T v_mps{};             ///< forward velocity [m/s]
-  T w_radps{};           ///< angular velocity [rad/s]
-  T dt_s{};              ///< interval [s], >= 0
-  T sigma_v_mps{};       ///< standard deviation of v over the interval [m/s], > 0
-  T sigma_w_radps{};     ///< standard deviation of w over the interval [rad/s], > 0
+  T v_mps{};          ///< forward velocity [m/s]
+  T w_radps{};        ///< angular velocity [rad/s]
+  T dt_s{};           ///< interval [s], >= 0
+  T sigma_v_mps{};    ///< standard deviation of v over the interval [m/s], > 0
+  T sigma_w_radps{};  ///< standard deviation of w over the interval [rad/s], > 0
 };
 
 /// Applies the motion model.
@@ -53,11 +53,11 @@ template <typename T>
 struct OdometryModel {
   T scale_v = T(1);
   T scale_w = T(1);
-  T alpha_v_sqrt_s = T(0);      ///< [sqrt(s)]
-  T q_v_m2ps = T(0);            ///< [m^2/s]
-  T alpha_w_sqrt_s = T(0);      ///< [sqrt(s)]
+  T alpha_v_sqrt_s = T(0);          ///< [sqrt(s)]
+  T q_v_m2ps = T(0);                ///< [m^2/s]
+  T alpha_w_sqrt_s = T(0);          ///< [sqrt(s)]
   T alpha_wv_rad_sqrt_s_pm = T(0);  ///< [rad sqrt(s) / m]
-  T q_w_rad2ps = T(0);          ///< [rad^2/s]
+  T q_w_rad2ps = T(0);              ///< [rad^2/s]
 
   bool valid() const {
     const T f[] = {scale_v, scale_w, alpha_v_sqrt_s, q_v_m2ps, alpha_w_sqrt_s, alpha_wv_rad_sqrt_s_pm, q_w_rad2ps};

@@ -15,13 +15,13 @@ namespace geojcbb::ekf {
 
 template <typename T>
 struct RangeBearingModel {
-  T range_rel_bias0 = T(0);          ///< c0: relative range bias at bearing 0
-  T range_rel_bias1_per_rad = T(0);  ///< c1: its slope in the bearing [1/rad]
-  T range_rel_bias2_per_rad2 = T(0); ///< c2: its curvature in the bearing [1/rad^2]
-  T bearing_bias_rad = T(0);         ///< b0 [rad]
-  T sigma_range_m = T(0.1);          ///< s_r0: the constant part of the range std [m]
-  T sigma_range_rel = T(0);          ///< k_r: the part proportional to the range [m/m]
-  T sigma_bearing_rad = T(0.01);     ///< s_b [rad]
+  T range_rel_bias0 = T(0);           ///< c0: relative range bias at bearing 0
+  T range_rel_bias1_per_rad = T(0);   ///< c1: its slope in the bearing [1/rad]
+  T range_rel_bias2_per_rad2 = T(0);  ///< c2: its curvature in the bearing [1/rad^2]
+  T bearing_bias_rad = T(0);          ///< b0 [rad]
+  T sigma_range_m = T(0.1);           ///< s_r0: the constant part of the range std [m]
+  T sigma_range_rel = T(0);           ///< k_r: the part proportional to the range [m/m]
+  T sigma_bearing_rad = T(0.01);      ///< s_b [rad]
 
   /// True when every field is finite, the stds are non-negative and R is positive definite at
   /// every range (s_r0 > 0 or k_r > 0 with ranges > 0; s_b > 0).

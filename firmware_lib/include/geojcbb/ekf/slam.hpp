@@ -35,7 +35,7 @@ namespace geojcbb::ekf {
 
 /// The state layout as named constant blocks.
 struct Layout {
-  static constexpr int kPose = 0;      ///< x, y, theta
+  static constexpr int kPose = 0;  ///< x, y, theta
   static constexpr int kPoseSize = 3;
   static constexpr int landmark(int j) { return kPoseSize + 2 * j; }  ///< first row of landmark j
 };
@@ -49,23 +49,23 @@ constexpr int kUpdateBlockCols = 2 * kUpdateBlockPairs;
 /// Caller-owned scratch of predict_local() and update(); typically a static object on the device.
 /// O(n): the update's gain is one block of columns at a time (design.md, "Covariance engine").
 template <typename T, class B>
-struct Workspace {
+struct SlamWorkspace {
   static constexpr int kRows = Layout::landmark(B::kMaxLandmarks);
   std::array<T, static_cast<std::size_t>(kRows) * kUpdateBlockCols> V;  ///< P H_b^T, then P H_b^T L^-T (row-major)
-  std::array<T, 2 * B::kMaxObservations> nu;                   ///< per pair: innovation at the linearisation point
-  std::array<Vec2<T>, B::kMaxObservations> l0;                 ///< per pair: its landmark before the update
-  std::array<std::int16_t, B::kMaxObservations> obs;           ///< pair -> observation
-  std::array<std::int16_t, B::kMaxObservations> lm;            ///< pair -> landmark
-  std::array<Mat23<T>, B::kMaxObservations> Hp;                ///< pair -> dh/dpose
-  std::array<Mat2<T>, B::kMaxObservations> Hl;                 ///< pair -> dh/dlandmark
+  std::array<T, 2 * B::kMaxObservations> nu;          ///< per pair: innovation at the linearisation point
+  std::array<Vec2<T>, B::kMaxObservations> l0;        ///< per pair: its landmark before the update
+  std::array<std::int16_t, B::kMaxObservations> obs;  ///< pair -> observation
+  std::array<std::int16_t, B::kMaxObservations> lm;   ///< pair -> landmark
+  std::array<Mat23<T>, B::kMaxObservations> Hp;       ///< pair -> dh/dpose
+  std::array<Mat2<T>, B::kMaxObservations> Hl;        ///< pair -> dh/dlandmark
   /// Diagnostics of the last update(): blocks after the first whose S rounding left not positive
   /// definite (their fusion skipped, PX4-style), and variances floored (kMinVarianceRatio).
   int rejected_blocks = 0;
   int floored_variances = 0;
-  std::array<std::uint16_t, B::kMaxCandidates> cand;           ///< local map: candidate -> landmark
-  std::array<T, B::kMaxCandidates> cand_range;                 ///< local map: predicted range [m]
-  std::array<Mat23<T>, B::kMaxCandidates> cand_Hp;             ///< local map: dh/dpose
-  std::array<Mat2<T>, B::kMaxCandidates> cand_Hl;              ///< local map: dh/dlandmark
+  std::array<std::uint16_t, B::kMaxCandidates> cand;  ///< local map: candidate -> landmark
+  std::array<T, B::kMaxCandidates> cand_range;        ///< local map: predicted range [m]
+  std::array<Mat23<T>, B::kMaxCandidates> cand_Hp;    ///< local map: dh/dpose
+  std::array<Mat2<T>, B::kMaxCandidates> cand_Hl;     ///< local map: dh/dlandmark
 };
 
 /// Where the sensor can see: review() counts a landmark as expected only when its predicted
@@ -106,9 +106,9 @@ struct LandmarkPolicy {
 };
 
 struct ReviewStats {
-  int expected = 0;  ///< landmarks in the prediction that were in view
-  int paired = 0;    ///< of those, paired by the association
-  int removed = 0;   ///< landmarks removed (every rule)
+  int expected = 0;        ///< landmarks in the prediction that were in view
+  int paired = 0;          ///< of those, paired by the association
+  int removed = 0;         ///< landmarks removed (every rule)
   int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
   int removed_moved = 0;   ///< of those, removed by the static-gate rule
 };
@@ -179,8 +179,10 @@ class Slam {
     int lo = 0, hi = n_;  // binary search: ids increase with the index; <= log2(kMaxLandmarks) + 1 steps
     while (lo < hi) {
       const int mid = lo + (hi - lo) / 2;
-      if (id_[mid] < id) lo = mid + 1;
-      else hi = mid;
+      if (id_[mid] < id)
+        lo = mid + 1;
+      else
+        hi = mid;
     }
     return lo < n_ && id_[lo] == id ? lo : -1;
   }
@@ -244,7 +246,7 @@ class Slam {
   /// (r + d, eq. 5), nearest first and at most MaxCandidates, with their stable ids, predicted
   /// measurements h and C = H P H^T.
   /// @return kOk; kInvalidInput for a radius that is not positive and finite.
-  [[nodiscard]] Status predict_local(T radius_m, Workspace<T, B>& ws, Prediction<T, B>& out,
+  [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out,
                                      LocalMapStats& stats) const {
     if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
     auto& idx = ws.cand;
@@ -264,7 +266,7 @@ class Slam {
       } else {
         stats.truncated = true;
         if (!(r < rng[n - 1])) continue;  // farther than every kept candidate
-        k = n - 1;                         // the farthest kept candidate makes room
+        k = n - 1;                        // the farthest kept candidate makes room
       }
       for (; k > 0 && rng[k - 1] > r; --k) {  // <= kMaxCandidates
         rng[k] = rng[k - 1];
@@ -285,7 +287,7 @@ class Slam {
       const int la = Layout::landmark(idx[a]);
       // Row a of H P: the 2 x 3 pose part and, per b, the 2 x 2 landmark part.
       const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * block<3, 2>(0, la).transpose();  // P_lr = P_rl^T, stored once
-      for (int b = 0; b <= a; ++b) {  // <= kMaxCandidates
+      for (int b = 0; b <= a; ++b) {                                              // <= kMaxCandidates
         const int lb = Layout::landmark(idx[b]);
         const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
         Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
@@ -301,8 +303,7 @@ class Slam {
   /// @return kOk (also with no pairs); kInvalidInput for a count mismatch or an unknown landmark;
   ///         kNonFinite / kNotPositiveDefinite for bad observations or an S that is not positive
   ///         definite. No state changes unless kOk.
-  [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc,
-                              Workspace<T, B>& ws) {
+  [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws) {
     if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
       return Status::kInvalidInput;
     }
@@ -337,9 +338,9 @@ class Slam {
     // engine"): with S = L L^T of the whole batch, the block's Schur complement is its diagonal
     // block of L, which the block's S from the already-updated P equals; so the blocks together are
     // the batch update x <- x + W L^-1 nu, P <- P - W W^T, W = P H^T L^-T, and need O(n) scratch.
-    for (int b0 = 0; b0 < p; b0 += G) {  // <= ceil(kMaxObservations / G) blocks
+    for (int b0 = 0; b0 < p; b0 += G) {       // <= ceil(kMaxObservations / G) blocks
       const int q = p - b0 < G ? p - b0 : G;  // pairs in this block
-      const int k = 2 * q;                     // rows of H_b
+      const int k = 2 * q;                    // rows of H_b
       // A = P H_b^T, K columns (the unused ones of a short block zero).  O(n)
       for (int r = 0; r < n; ++r) {  // <= kMaxState
         const T pr0 = cov(r, 0), pr1 = cov(r, 1), pr2 = cov(r, 2);
@@ -449,8 +450,9 @@ class Slam {
     // covariance before writing any of them.
     const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose())))) return Status::kNotPositiveDefinite;  // R at rounding's edge
-    for (int c = 0; c < n; ++c) {  // <= kMaxState
+    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose()))))
+      return Status::kNotPositiveDefinite;  // R at rounding's edge
+    for (int c = 0; c < n; ++c) {           // <= kMaxState
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
         for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
@@ -478,7 +480,8 @@ class Slam {
   ///         unless kOk.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose())))) return Status::kNotPositiveDefinite;  // R at rounding's edge
+    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose()))))
+      return Status::kNotPositiveDefinite;  // R at rounding's edge
     if (!is_spd(Pll)) return Status::kNotPositiveDefinite;
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
@@ -499,20 +502,19 @@ class Slam {
   /// other ids are unchanged).
   /// @return kOk; kInvalidInput for a bad policy or view, or counts out of range. No state changes
   ///         unless kOk.
-  [[nodiscard]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
-                              const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats) {
+  [[nodiscard]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
+                              const LandmarkPolicy& policy, ReviewStats& stats) {
     if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
         !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
         !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {
       return Status::kInvalidInput;
     }
-    if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 ||
-        assoc.count > B::kMaxObservations) {
+    if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations) {
       return Status::kInvalidInput;
     }
     stats = ReviewStats{};
     for (int j = 0; j < n_; ++j) drop_[j] = 0;  // <= kMaxLandmarks
-    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+    for (int a = 0; a < pred.count; ++a) {      // <= kMaxCandidates
       const int j = index_of(pred.id[a]);
       if (j < 0) continue;  // not in this map
       bool paired = false;
@@ -520,7 +522,8 @@ class Slam {
       const Vec2<T>& h = pred.h[a];
       bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
       for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
-        in_view = !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
+        in_view =
+            !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
       }
       stats.expected += in_view;
       if ((in_view || paired) && expected_[j] < 65535) ++expected_[j];
@@ -566,7 +569,10 @@ class Slam {
     }
     stats.removed = n_ - kept;
     if (kept == n_) return Status::kOk;
-    auto old_row = [&](int r) { return r < Layout::kPoseSize ? r : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2; };
+    auto old_row = [&](int r) {
+      return r < Layout::kPoseSize ? r
+                                   : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2;
+    };
     const int n = Layout::landmark(kept);
     // Packed: old_row is increasing, so the source of (r, c), r <= c, lies at or after it in the
     // column-by-column order; copying in that order reads every source before it is overwritten.
@@ -628,7 +634,7 @@ class Slam {
   /// P <- P - V V^T over the packed upper triangle (the K columns of ws.V); a variance that
   /// rounding would take below kMinVarianceRatio of its value before is floored there (raising a
   /// diagonal entry adds a positive semidefinite matrix, so P stays positive definite).  O(n^2 K)
-  void downdate(int n, Workspace<T, B>& ws) {
+  void downdate(int n, SlamWorkspace<T, B>& ws) {
     constexpr int K = kUpdateBlockCols;
     const T* v = ws.V.data();
     for (int c = 0; c < n; ++c) {  // <= kMaxState columns
@@ -677,8 +683,8 @@ class Slam {
   static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
   std::array<T, 2 * B::kMaxLandmarks> first_{};  ///< each landmark's first estimate (FEJ)
-  T prior_[2] = {T(0), T(0)};  ///< the position before the updates since the last predict (FEJ)
-  bool updated_ = false;       ///< an update since the last predict
+  T prior_[2] = {T(0), T(0)};                    ///< the position before the updates since the last predict (FEJ)
+  bool updated_ = false;                         ///< an update since the last predict
   FilterOptions options_;
   std::array<FeatureId, B::kMaxLandmarks> id_{};
   std::array<std::uint16_t, B::kMaxLandmarks> hits_{};

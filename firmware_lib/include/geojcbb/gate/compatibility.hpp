@@ -23,9 +23,7 @@ namespace geojcbb {
 template <typename T>
 T mahalanobis2(const Vec2<T>& nu, const Mat2<T>& S) {
   const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-  return (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() +
-          S(0, 0) * nu.y() * nu.y()) /
-         det;
+  return (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
 }
 
 /// The local association region (2019 paper, eq. 5): predicted range < r + d, or everything when the
@@ -79,7 +77,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
     if (table.in_region[j]) ++diag.candidates_in_region;
   }
   const T gate = cfg.gate.individual;
-  const T bound = T(2) * gate;  // the lower bounds' margin over rounding
+  const T bound = T(2) * gate;           // the lower bounds' margin over rounding
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     int n = 0;
     const Mat2<T>& R = obs.R[i];
@@ -92,7 +90,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
       const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + R;
       const T d2 = mahalanobis2(nu, S);
       if (!(d2 <= gate)) continue;
-      int k = n++;  // insertion sort by d2, ties by candidate index (stable)
+      int k = n++;                                     // insertion sort by d2, ties by candidate index (stable)
       for (; k > 0 && table.d2[i][k - 1] > d2; --k) {  // <= kMaxCandidates
         table.d2[i][k] = table.d2[i][k - 1];
         table.cand[i][k] = table.cand[i][k - 1];

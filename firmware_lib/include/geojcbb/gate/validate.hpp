@@ -29,22 +29,20 @@ template <typename T, class B>
   if (pred.C.rows() != 2 * pred.count || pred.C.cols() != 2 * pred.count) {
     return Status::kInvalidInput;
   }
-  if (cfg.node_budget < 1 || cfg.node_budget > B::kMaxJcbbNodes || !cfg.gate.valid()) {
+  if (cfg.node_budget == 0 || cfg.node_budget > B::kMaxJcbbNodes || !cfg.gate.valid()) {
     return Status::kInvalidInput;
   }
   if (cfg.local_region && !(std::isfinite(cfg.local_radius_m) && cfg.local_radius_m > T(0))) {
     return Status::kInvalidInput;
   }
   const int min_groups = cfg.grouping == Grouping::kGmmEm ? 0 : 1;  // EM: 0 chooses K by BIC
-  if (cfg.groups < min_groups || cfg.groups > B::kMaxGroups ||
-      cfg.kmeans_max_iterations < 1 || cfg.kmeans_max_iterations > kMaxKMeansIterations ||
-      cfg.em.max_iterations < 1 || cfg.em.max_iterations > kMaxEmIterations ||
-      !(std::isfinite(cfg.em.tolerance) && cfg.em.tolerance >= T(0)) ||
+  if (cfg.groups < min_groups || cfg.groups > B::kMaxGroups || cfg.kmeans_max_iterations < 1 ||
+      cfg.kmeans_max_iterations > kMaxKMeansIterations || cfg.em.max_iterations < 1 ||
+      cfg.em.max_iterations > kMaxEmIterations || !(std::isfinite(cfg.em.tolerance) && cfg.em.tolerance >= T(0)) ||
       !(std::isfinite(cfg.em.covariance_floor_m2) && cfg.em.covariance_floor_m2 > T(0)) ||
       (cfg.em.stop != EmStop::kObjective && cfg.em.stop != EmStop::kGroupsStable) ||
-      (cfg.em.start != EmStart::kFarthestFirst && cfg.em.start != EmStart::kKMeans) ||
-      cfg.em.stable_iterations < 1 || cfg.em.stable_iterations > kMaxEmIterations ||
-      !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(1)) ||
+      (cfg.em.start != EmStart::kFarthestFirst && cfg.em.start != EmStart::kKMeans) || cfg.em.stable_iterations < 1 ||
+      cfg.em.stable_iterations > kMaxEmIterations || !(cfg.em.hard_margin >= T(0) && cfg.em.hard_margin <= T(1)) ||
       (cfg.covariance_check != CovarianceCheck::kWhereRead && cfg.covariance_check != CovarianceCheck::kFull) ||
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
@@ -54,15 +52,17 @@ template <typename T, class B>
                    cfg.seed_min_pairings < 2 || cfg.search != SearchMethod::kJcbb)) {
     return Status::kInvalidInput;
   }
-  if (cfg.rjc && (cfg.rjc_tries < 1 || cfg.rjc_tries > kMaxRjcTries || cfg.node_budget < cfg.rjc_tries ||
-                  cfg.rjc_subset < 1 || cfg.rjc_subset > B::kMaxObservations || cfg.search != SearchMethod::kJcbb ||
-                  cfg.grouping != Grouping::kNone || cfg.ambiguity_margin > T(0))) {
+  if (cfg.rjc &&
+      (cfg.rjc_tries < 1 || cfg.rjc_tries > kMaxRjcTries || cfg.node_budget < static_cast<NodeCount>(cfg.rjc_tries) ||
+       cfg.rjc_subset < 1 || cfg.rjc_subset > B::kMaxObservations || cfg.search != SearchMethod::kJcbb ||
+       cfg.grouping != Grouping::kNone || cfg.ambiguity_margin > T(0))) {
     return Status::kInvalidInput;
   }
   const Status s = validate_observations(obs);
   if (s != Status::kOk) return s;
-  return validate_prediction(pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); },
-                             cfg.covariance_check == CovarianceCheck::kFull);
+  return validate_prediction(
+      pred, [&cfg](const Vec2<T>& h) { return in_local_region(cfg, h); },
+      cfg.covariance_check == CovarianceCheck::kFull);
 }
 
 /// The observations' values (counts are checked by the caller).

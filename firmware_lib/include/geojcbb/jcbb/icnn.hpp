@@ -12,8 +12,8 @@ namespace geojcbb {
 
 /// Fills out.best and out.pairings (out.joint_d2 is left to the caller: see hypothesis_joint_d2).
 template <typename T, class B>
-void icnn_search(int m, bool exclusion, const CompatibilityTable<T, B>& table,
-                 JcbbWorkspace<T, B>& ws, int n_candidates, SearchOutcome<T, B>& out) {
+void icnn_search(int m, bool exclusion, const CompatibilityTable<T, B>& table, JcbbWorkspace<T, B>& ws,
+                 int n_candidates, SearchOutcome<T, B>& out) {
   out.pairings = 0;
   out.nodes = 0;
   out.budget_hit = false;
@@ -23,7 +23,7 @@ void icnn_search(int m, bool exclusion, const CompatibilityTable<T, B>& table,
   }
   if (!exclusion) return;
   for (int j = 0; j < n_candidates; ++j) ws.used[j] = 0;  // <= kMaxCandidates
-  for (int round = 0; round < m; ++round) {                // <= kMaxObservations
+  for (int round = 0; round < m; ++round) {               // <= kMaxObservations
     int best_i = -1;
     int best_c = -1;
     T best_d2 = std::numeric_limits<T>::infinity();
@@ -52,8 +52,8 @@ void icnn_search(int m, bool exclusion, const CompatibilityTable<T, B>& table,
 /// @return kOk; kNotPositiveDefinite for a non-positive pivot.
 template <typename T, class B>
 [[nodiscard]] Status hypothesis_joint_d2(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                         const std::array<std::int16_t, B::kMaxObservations>& hyp,
-                                         IncrementalJoint<T, B::kMaxObservations>& joint, T& d2_out) {
+                                         const Hypothesis<B>& hyp, IncrementalJoint<T, B::kMaxObservations>& joint,
+                                         T& d2_out) {
   joint.clear();
   for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
     const int c = hyp[i];

@@ -22,14 +22,14 @@ namespace geojcbb {
 
 template <typename T, class B>
 struct SearchOutcome {
-  std::array<std::int16_t, B::kMaxObservations> best;  ///< per observation: candidate or -1
+  Hypothesis<B> best;  ///< per observation: candidate or -1
   int pairings = 0;
   T joint_d2 = T(0);
   std::uint32_t nodes = 0;
   bool budget_hit = false;
   /// With an ambiguity margin: the closest other hypothesis with as many pairings (valid when
   /// have_runner_up), and its joint d2.
-  std::array<std::int16_t, B::kMaxObservations> runner_up;
+  Hypothesis<B> runner_up;
   bool have_runner_up = false;
   T runner_up_d2 = T(0);
   /// Observations the best and the runner-up pair differently, when the runner-up is within the
@@ -43,11 +43,11 @@ struct SearchOutcome {
 template <typename T, class B>
 struct JcbbWorkspace {
   IncrementalJoint<T, B::kMaxObservations> joint;
-  std::array<std::int8_t, B::kMaxObservations> order;     ///< level -> observation
-  std::array<std::int16_t, B::kMaxObservations> next;     ///< level -> next candidate position
-  std::array<bool, B::kMaxObservations> paired;           ///< level -> holds a pairing
-  std::array<std::int16_t, B::kMaxObservations> current;  ///< observation -> candidate or -1
-  std::array<std::uint8_t, B::kMaxCandidates> used;       ///< candidate -> pairings holding it
+  std::array<std::int8_t, B::kMaxObservations> order;  ///< level -> observation
+  std::array<std::int16_t, B::kMaxObservations> next;  ///< level -> next candidate position
+  std::array<bool, B::kMaxObservations> paired;        ///< level -> holds a pairing
+  Hypothesis<B> current;                               ///< observation -> candidate or -1
+  std::array<std::uint8_t, B::kMaxCandidates> used;    ///< candidate -> pairings holding it
 };
 
 /// The observations one search covers: all, or those of one group.
@@ -87,16 +87,15 @@ int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first
 ///         out.best is -1 outside the subset.
 template <typename T, class B>
 [[nodiscard]] Status jcbb_search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                 const AssociationConfig<T, B>& cfg,
-                                 const CompatibilityTable<T, B>& table, ObservationSubset subset,
-                                 std::uint32_t node_budget, JcbbWorkspace<T, B>& ws,
+                                 const AssociationConfig<T, B>& cfg, const CompatibilityTable<T, B>& table,
+                                 ObservationSubset subset, NodeCount node_budget, JcbbWorkspace<T, B>& ws,
                                  SearchOutcome<T, B>& out,
                                  const std::array<std::int16_t, B::kMaxObservations>* prefix = nullptr) {
   const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, subset, ws.order);
   const bool exclusion = cfg.mutual_exclusion;
   const bool optimal = cfg.optimal_criterion;
   const T margin = cfg.ambiguity_margin;
-  const std::uint32_t budget = node_budget;
+  const NodeCount budget = node_budget;
   ws.joint.clear();
   for (int j = 0; j < pred.count; ++j) ws.used[j] = 0;  // <= kMaxCandidates
   for (int i = 0; i < obs.count; ++i) {                 // <= kMaxObservations
@@ -166,7 +165,8 @@ template <typename T, class B>
         for (int i = 0; i < obs.count; ++i) out.best[i] = ws.current[i];  // <= kMaxObservations
       } else if (margin > T(0) && p == out.pairings && p > 0) {
         const T gap = d2 > out.joint_d2 ? d2 - out.joint_d2 : out.joint_d2 - d2;
-        const T held = out.runner_up_d2 > out.joint_d2 ? out.runner_up_d2 - out.joint_d2 : out.joint_d2 - out.runner_up_d2;
+        const T held =
+            out.runner_up_d2 > out.joint_d2 ? out.runner_up_d2 - out.joint_d2 : out.joint_d2 - out.runner_up_d2;
         if (!out.have_runner_up || gap < held) {
           out.have_runner_up = true;
           out.runner_up_d2 = d2;

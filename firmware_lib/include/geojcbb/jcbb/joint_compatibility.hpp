@@ -42,8 +42,7 @@ class IncrementalJoint {
   ///         entry of C read here that is not finite or differs from its mirror image (when checking
   ///         reads); kNotPositiveDefinite for a pivot <= 0. Nothing held changes unless kOk.
   template <class CMatrix>
-  [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu,
-                                T& d2_out) {
+  [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu, T& d2_out) {
     if (pairs_ >= MaxPairs) return Status::kCapacityExceeded;
     const int n = 2 * pairs_;  // rows held
     T* row0 = &L_[static_cast<std::size_t>(n) * kRows];
@@ -112,8 +111,8 @@ class IncrementalJoint {
 
  private:
   std::array<T, static_cast<std::size_t>(kRows) * kRows> L_{};  // row-major, lower triangle
-  std::array<T, kRows> y_{};                                      // L^-1 nu_H
-  std::array<T, MaxPairs + 1> d2_{};                              // d2_[p]: joint d2 of p pairings
+  std::array<T, kRows> y_{};                                    // L^-1 nu_H
+  std::array<T, MaxPairs + 1> d2_{};                            // d2_[p]: joint d2 of p pairings
   std::array<std::int16_t, MaxPairs> cand_{};
   int pairs_ = 0;
   bool check_reads_ = true;

@@ -16,7 +16,6 @@
 
 namespace geojcbb {
 
-
 template <class B>
 struct RjcWorkspace {
   std::array<std::int8_t, B::kMaxObservations> pool;    ///< observations with a compatible candidate
@@ -41,7 +40,7 @@ struct RjcStats {
 template <typename T, class B>
 [[nodiscard]] Status rjc_search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                 const AssociationConfig<T, B>& cfg, const CompatibilityTable<T, B>& table,
-                                std::uint32_t node_budget, int tries, int subset_size, std::uint64_t seed,
+                                NodeCount node_budget, int tries, int subset_size, std::uint64_t seed,
                                 JcbbWorkspace<T, B>& jws, SearchOutcome<T, B>& scratch, RjcWorkspace<B>& rws,
                                 std::array<std::int16_t, B::kMaxObservations>& best, T& d2, RjcStats& stats) {
   const int m = obs.count;
@@ -53,7 +52,7 @@ template <typename T, class B>
   }
   stats = RjcStats{};
   d2 = T(0);
-  const std::uint32_t per_try = node_budget / static_cast<std::uint32_t>(tries);
+  const NodeCount per_try = node_budget / static_cast<NodeCount>(tries);
   for (int t = 0; t < tries; ++t) {  // <= kMaxRjcTries
     // A random subset: the first subset_size entries of a partial Fisher-Yates shuffle of the pool.
     for (int i = 0; i < m; ++i) rws.label[i] = 1;  // <= kMaxObservations
@@ -72,7 +71,7 @@ template <typename T, class B>
     // The subset's answer, then nearest neighbour under the joint test for the others.
     jws.joint.clear();
     for (int j = 0; j < pred.count; ++j) jws.used[j] = 0;  // <= kMaxCandidates
-    for (int i = 0; i < m; ++i) {                           // <= kMaxObservations
+    for (int i = 0; i < m; ++i) {                          // <= kMaxObservations
       rws.trial[i] = scratch.best[i];
       const int c = scratch.best[i];
       if (c < 0) continue;

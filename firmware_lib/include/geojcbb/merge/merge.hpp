@@ -22,20 +22,18 @@
 
 namespace geojcbb {
 
-using Hypothesis = std::int16_t;  // candidate index or -1
-
 struct MergeStats {
-  std::uint16_t conflicts = 0;      ///< features claimed by more than one observation
-  bool recheck_failed = false;      ///< the union failed the joint test and was repaired
-  std::uint16_t repair_dropped = 0; ///< pairings the repair removed
-  std::uint32_t repair_nodes = 0;
+  std::uint16_t conflicts = 0;       ///< features claimed by more than one observation
+  bool recheck_failed = false;       ///< the union failed the joint test and was repaired
+  std::uint16_t repair_dropped = 0;  ///< pairings the repair removed
+  NodeCount repair_nodes = 0;
   bool repair_budget_hit = false;
 };
 
 template <typename T, class B>
 struct MergeWorkspace {
   CompatibilityTable<T, B> reduced;  ///< one candidate per observation, for the repair search
-  std::array<Hypothesis, B::kMaxObservations> trial;
+  Hypothesis<B> trial;
   SearchOutcome<T, B> repair;
 };
 
@@ -57,7 +55,7 @@ void reassign(const CompatibilityTable<T, B>& table, int m, int i, Hyp& hyp) {
   for (int q = 0; q < table.count[i]; ++q) {  // <= kMaxCandidates
     const int c = table.cand[i][q];
     if (!held(hyp, m, c, i)) {
-      hyp[i] = static_cast<Hypothesis>(c);
+      hyp[i] = static_cast<CandidateIndex>(c);
       return;
     }
   }
@@ -82,9 +80,8 @@ T pair_d2(const CompatibilityTable<T, B>& table, int i, int c) {
 template <typename T, class B>
 [[nodiscard]] Status merge_groups(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                   const AssociationConfig<T, B>& cfg, const CompatibilityTable<T, B>& table,
-                                  std::uint32_t nodes_left, MergeWorkspace<T, B>& ws,
-                                  JcbbWorkspace<T, B>& jws, std::array<Hypothesis, B::kMaxObservations>& hyp,
-                                  T& joint_d2, MergeStats& st) {
+                                  std::uint32_t nodes_left, MergeWorkspace<T, B>& ws, JcbbWorkspace<T, B>& jws,
+                                  Hypothesis<B>& hyp, T& joint_d2, MergeStats& st) {
   const int m = obs.count;
   st = MergeStats{};
   if (cfg.mutual_exclusion) {

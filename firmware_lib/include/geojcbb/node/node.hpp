@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb/protocol/protocol.hpp"
@@ -56,6 +57,9 @@ static_assert(wire_agreement::same_strategies(), "geojcbb::Strategy and CONFIG's
 static_assert(wire_agreement::same_outcomes(), "node::Outcome and ASSOC_RESULT's outcome, value for value");
 static_assert(kNewFeature == proto::kFeatureNew && kUnmatched == proto::kFeatureUnmatched,
               "ASSOC_RESULT's feature ids NEW and UNMATCHED are the association's");
+static_assert(std::is_same<decltype(proto::Config::node_budget), NodeCount>::value &&
+                  std::is_same<decltype(proto::Capabilities::max_jcbb_nodes), NodeCount>::value,
+              "the wire's node budget is the library's NodeCount");
 static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
               "the wire's default batch size is DefaultBounds' observations per scan");
 
@@ -79,12 +83,10 @@ StepSettings<T> settings_from(const proto::Config& m) {
   s.params.condition_groups = m.condition_groups;
   s.params.dbscan_eps_m = static_cast<T>(m.dbscan_eps_m);
   s.params.dbscan_min_points = m.dbscan_min_points;
-  s.params.node_budget = m.node_budget > static_cast<std::uint32_t>(B::kMaxJcbbNodes)
-                             ? -1  // over the device's capacity: refused by configure()
-                             : static_cast<int>(m.node_budget);
+  s.params.node_budget = m.node_budget;  // over the device's capacity: refused by configure()
   s.new_landmark_level = m.new_landmark_level;
-  s.view = ekf::Visibility<T>{static_cast<T>(m.min_range_m), static_cast<T>(m.max_range_m),
-                              static_cast<T>(m.half_fov_rad)};
+  s.view =
+      ekf::Visibility<T>{static_cast<T>(m.min_range_m), static_cast<T>(m.max_range_m), static_cast<T>(m.half_fov_rad)};
   s.policy = ekf::LandmarkPolicy{m.confirm_hits, m.max_misses, m.max_tentative_reviews};
   return s;
 }
@@ -220,7 +222,7 @@ class Node {
     c.max_candidates = static_cast<std::uint16_t>(B::kMaxCandidates);
     c.max_groups = static_cast<std::uint8_t>(B::kMaxGroups);
     c.max_landmarks = static_cast<std::uint16_t>(B::kMaxLandmarks);
-    c.max_jcbb_nodes = static_cast<std::uint32_t>(B::kMaxJcbbNodes);
+    c.max_jcbb_nodes = B::kMaxJcbbNodes;
     c.scalar_bytes = static_cast<std::uint8_t>(sizeof(T));
     c.boot_id = boot_id_;
     const char id[] = "geojcbb node";
@@ -306,7 +308,7 @@ class Node {
       proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(i)];
       q.outcome = static_cast<proto::PairingOutcome>(last_.outcome[i]);
       const bool has_id = last_.outcome[i] == Outcome::kPaired || last_.outcome[i] == Outcome::kNewLandmark;
-      q.feature_id = has_id ? last_.feature[i]
+      q.feature_id = has_id                                    ? last_.feature[i]
                      : last_.outcome[i] == Outcome::kUnmatched ? proto::kFeatureUnmatched
                                                                : proto::kFeatureNew;
       q.d2 = static_cast<float>(last_.d2[i]);

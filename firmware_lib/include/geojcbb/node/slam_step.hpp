@@ -26,7 +26,7 @@ struct StepSettings {
   double new_landmark_level = 0.999;  ///< chi-square level of the augmentation gate
   ekf::Visibility<T> view;            ///< where a mapped landmark is expected (for review)
   ekf::LandmarkPolicy policy;
-  ekf::FilterOptions filter;          ///< how the filter linearises (applied at the next reset)
+  ekf::FilterOptions filter;  ///< how the filter linearises (applied at the next reset)
   /// Off: observations with no compatible candidate never become landmarks (a known, fixed map:
   /// localisation only); they are reported kNewDropped.
   bool augment = true;
@@ -34,11 +34,11 @@ struct StepSettings {
 
 /// Per observation of a scan, what became of it.
 enum class Outcome : std::uint8_t {
-  kPaired = 0,     ///< feature: the map landmark's id
-  kNewLandmark,    ///< no compatible candidate; became the landmark `feature`
-  kNewDropped,     ///< no compatible candidate, but inside the augmentation gate (or augmentation off): dropped
-  kUnmatched,      ///< compatible candidates, left unpaired by the search (ambiguous)
-  kNotAugmented,   ///< would have become a landmark, but the map is full
+  kPaired = 0,    ///< feature: the map landmark's id
+  kNewLandmark,   ///< no compatible candidate; became the landmark `feature`
+  kNewDropped,    ///< no compatible candidate, but inside the augmentation gate (or augmentation off): dropped
+  kUnmatched,     ///< compatible candidates, left unpaired by the search (ambiguous)
+  kNotAugmented,  ///< would have become a landmark, but the map is full
 };
 
 /// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without).
@@ -189,9 +189,9 @@ class SlamStep {
 
  private:
   ekf::Slam<T, B> slam_;
-  ekf::Workspace<T, B> ekf_ws_;
+  ekf::SlamWorkspace<T, B> ekf_ws_;
   Prediction<T, B> pred_;
-  Workspace<T, B> ws_;
+  AssociationWorkspace<T, B> ws_;
   Association<T, B> assoc_;
   AssociationConfig<T, B> cfg_;
   T gate_ = T(0);

@@ -35,7 +35,7 @@ struct ReportRow {
   int fp_clutter = 0;        ///< FP that paired clutter (sum over the runs)
   double duplicates = NAN;   ///< map landmarks beyond one per true landmark, at the end, mean over runs
   double ms_median = NAN, ms_p90 = NAN, ms_max = NAN;  ///< per-scan association time over every scan [ms]
-  int reloc_runs = 0, reloc_found3 = 0;  ///< kidnap scenes: runs, and runs relocalised within 3 scans
+  int reloc_runs = 0, reloc_found3 = 0;                ///< kidnap scenes: runs, and runs relocalised within 3 scans
 };
 
 inline double accuracy(const Score& s) {
@@ -110,7 +110,8 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   bool kidnap = false;
   for (const ReportRow& r : rows) kidnap = kidnap || r.reloc_runs > 0;
   if (kidnap) {
-    std::fprintf(f, "Relocalisation: runs found within 3 scans of the kidnap (a scan with >= 2 correct pairings, then 10 "
+    std::fprintf(f,
+                 "Relocalisation: runs found within 3 scans of the kidnap (a scan with >= 2 correct pairings, then 10 "
                  "scans without a false pairing)\n");
     for (const ReportRow& r : rows) {
       if (r.reloc_runs > 0)

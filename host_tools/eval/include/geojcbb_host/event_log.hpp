@@ -32,7 +32,7 @@ struct OdomEvent {
 };
 struct MeasEvent {
   double t, range, bearing;
-  std::string label;                          ///< empty: unlabelled
+  std::string label;                            ///< empty: unlabelled
   double sigma_range = -1, sigma_bearing = -1;  ///< [m], [rad] (< 0: not given)
 };
 struct LandmarkEvent {

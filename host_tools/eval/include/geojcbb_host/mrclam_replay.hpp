@@ -65,7 +65,7 @@ struct MrclamModel {
   MrclamNoise noise;  ///< where a part below is off
   bool camera = false;
   bool drive = false;
-  double inflation = 1.0;  ///< on the calibrated standard deviations
+  double inflation = 1.0;                ///< on the calibrated standard deviations
   mrclam::RobotCalibration calibration;  ///< of this robot
 };
 

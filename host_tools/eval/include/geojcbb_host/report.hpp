@@ -21,13 +21,13 @@ struct RunAggregate {
   int runs = 0, failed = 0, scans = 0, observations = 0, budget_hits = 0, fp_clutter = 0;
   int landmarks = 0, spurious_in_map = 0, duplicates = 0, removed_true = 0;
   double assoc_s = 0, run_s = 0, abs_x = 0, abs_y = 0;
-  double anees_sum = 0;                               ///< sum over runs of each run's time-averaged NEES
-  std::vector<double> nees_sum, ex_sum, ey_sum, t;    ///< per scan, over the runs
-  std::vector<double> scan_ms;                        ///< every scan's association time [ms]
-  int reloc_runs = 0, reloc_found3 = 0;               ///< kidnap scenes: runs, and found within 3 scans
-  RunResult first;                                    ///< the run the path figure shows (set by the caller)
+  double anees_sum = 0;                             ///< sum over runs of each run's time-averaged NEES
+  std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
+  std::vector<double> scan_ms;                      ///< every scan's association time [ms]
+  int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
+  RunResult first;                                  ///< the run the path figure shows (set by the caller)
   bool have_first = false;
-  std::string error;                                  ///< of the last failed run
+  std::string error;  ///< of the last failed run
 
   /// Adds a run; kidnap_t_s > 0: a kidnap scene (relocalisation counted).
   void add(const RunResult& r, double run_s, double kidnap_t_s = 0);

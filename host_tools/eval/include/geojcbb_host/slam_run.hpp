@@ -37,21 +37,21 @@ struct RunOptions {
   double compensation_m = 5.0;       ///< d in r + d (eq. 5); r is the scenario's max range
   int groups = 3;                    ///< K for k-means / GMM-EM
   bool condition_groups = false;
-  int node_budget = 0;  ///< JCBB nodes per scan (0: the capacity's MaxJcbbNodes)
-  int max_steps = 0;                    ///< stop after this many control intervals (0: the whole path)
-  ekf::LandmarkPolicy landmark_policy;  ///< tentative landmarks (confirm / remove)
-  ekf::FilterOptions filter;            ///< linearisation (first-estimates Jacobians)
-  double ambiguity_margin = 0;          ///< AssociationConfig::ambiguity_margin (0: off)
-  bool new_if_candidates_taken = false; ///< AssociationConfig::new_if_candidates_taken
-  bool verify = false;                  ///< AssociationConfig::verify in any preset (PCJCBB: always)
-  double seed_min_position_var_m2 = 4;  ///< PCJCBB's seed trigger (AssociationConfig) [m^2]
-  double static_gate_level = 0;         ///< chi-square level of LandmarkPolicy::static_gate_d2 (0: off)
+  NodeCount node_budget = 0;             ///< JCBB nodes per scan (0: the capacity's MaxJcbbNodes)
+  int max_steps = 0;                     ///< stop after this many control intervals (0: the whole path)
+  ekf::LandmarkPolicy landmark_policy;   ///< tentative landmarks (confirm / remove)
+  ekf::FilterOptions filter;             ///< linearisation (first-estimates Jacobians)
+  double ambiguity_margin = 0;           ///< AssociationConfig::ambiguity_margin (0: off)
+  bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
+  bool verify = false;                   ///< AssociationConfig::verify in any preset (PCJCBB: always)
+  double seed_min_position_var_m2 = 4;   ///< PCJCBB's seed trigger (AssociationConfig) [m^2]
+  double static_gate_level = 0;          ///< chi-square level of LandmarkPolicy::static_gate_d2 (0: off)
   /// Known-map mode (localisation only): these true landmarks (index = truth) are the map from the
   /// start, with std known_map_sigma_m, and nothing is added or removed. Empty: SLAM.
   std::vector<Eigen::Vector2d> known_map;
   double known_map_sigma_m = 0.01;
-  double view_margin_m = 1.0;           ///< a landmark within this of the range limits is not expected
-  double occlusion_rad = 0;             ///< ekf::Visibility::occlusion_rad (0: off)
+  double view_margin_m = 1.0;  ///< a landmark within this of the range limits is not expected
+  double occlusion_rad = 0;    ///< ekf::Visibility::occlusion_rad (0: off)
   /// Optional: true landmark -> group, for RunResult::group_score (landmarks
   /// too close together for geometry to tell apart share a group). Empty:
   /// group_score equals score.
@@ -88,8 +88,8 @@ struct Method {
 struct StepRecord {
   double t_s;
   Pose2<double> truth, estimate;
-  double var_x, var_y;  ///< pose variances [m^2]
-  double pose_nees;     ///< (x, y, theta) NEES
+  double var_x, var_y;   ///< pose variances [m^2]
+  double pose_nees;      ///< (x, y, theta) NEES
   double var_theta = 0;  ///< heading variance [rad^2]
   int paired = 0;        ///< pairings of the scan
   double nis_sum = 0;    ///< sum of their individual NIS (d2, 2 dof each)
@@ -173,9 +173,9 @@ int relocalised_at(const RunResult& r, double kidnap_t_s, int window = 10);
 struct RunInput {
   bool scan = false;
   double v_mps = 0, w_radps = 0, dt_s = 0, sigma_v_mps = 0, sigma_w_radps = 0;  ///< prediction
-  std::vector<SimObservation> observations;         ///< scan: (range, bearing), each with its truth and R
-  double t_s = 0;                                   ///< scan time (a prediction's start where known)
-  bool have_truth = false;                          ///< true_pose is known
+  std::vector<SimObservation> observations;  ///< scan: (range, bearing), each with its truth and R
+  double t_s = 0;                            ///< scan time (a prediction's start where known)
+  bool have_truth = false;                   ///< true_pose is known
   Pose2<double> true_pose{};
   /// A kidnap: the filter's pose covariance re-set to pose_cov, the estimate kept (no prediction,
   /// no scan in this input).

@@ -35,14 +35,18 @@
 
 namespace geojcbb::host::mrclam {
 
-constexpr int kRobots = 5;                  ///< robots are subjects 1..kRobots
-constexpr double kScanTolerance_s = 0.05;   ///< default scan grouping tolerance (see above)
-constexpr double kMaxTruthGap_s = 0.5;      ///< interpolate_truth refuses to bridge longer gaps
-constexpr double kOutlierRange_m = 0.5;     ///< a residual beyond either bound is an outlier
+constexpr int kRobots = 5;                 ///< robots are subjects 1..kRobots
+constexpr double kScanTolerance_s = 0.05;  ///< default scan grouping tolerance (see above)
+constexpr double kMaxTruthGap_s = 0.5;     ///< interpolate_truth refuses to bridge longer gaps
+constexpr double kOutlierRange_m = 0.5;    ///< a residual beyond either bound is an outlier
 constexpr double kOutlierBearing_rad = 0.2;
 
-struct OdometrySample { double t, v, w; };
-struct PoseSample { double t, x, y, theta; };
+struct OdometrySample {
+  double t, v, w;
+};
+struct PoseSample {
+  double t, x, y, theta;
+};
 
 struct Measurement {
   double t;        ///< its own time as logged [s]
@@ -57,7 +61,10 @@ struct Scan {
   std::vector<Measurement> z;
 };
 
-struct Landmark { int subject; double x, y, sx, sy; };
+struct Landmark {
+  int subject;
+  double x, y, sx, sy;
+};
 
 struct RobotLog {
   int robot = 0;  ///< 1..kRobots

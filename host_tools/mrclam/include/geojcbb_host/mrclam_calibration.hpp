@@ -20,8 +20,8 @@
 namespace geojcbb::host::mrclam {
 
 struct CalibrationOptions {
-  double fit_window_s = 4.0;     ///< the drive's scale and noise are fitted over windows of this length
-  double max_latency_s = 0.5;    ///< latency searched in [0, max] by 0.01 s
+  double fit_window_s = 4.0;          ///< the drive's scale and noise are fitted over windows of this length
+  double max_latency_s = 0.5;         ///< latency searched in [0, max] by 0.01 s
   double sigma_range_floor_m = 0.01;  ///< constant part of the range std
 };
 
@@ -29,10 +29,10 @@ struct RobotCalibration {
   int robot = 0;
   ekf::RangeBearingModel<double> sensor;
   ekf::OdometryModel<double> drive;
-  double latency_s = 0;       ///< the commands take effect this long after their time stamp
-  long measurements = 0;      ///< landmark measurements used for the camera
-  long outliers = 0;          ///< of those, beyond kOutlierRange_m / kOutlierBearing_rad (not fitted)
-  long windows = 0;           ///< drive windows used
+  double latency_s = 0;   ///< the commands take effect this long after their time stamp
+  long measurements = 0;  ///< landmark measurements used for the camera
+  long outliers = 0;      ///< of those, beyond kOutlierRange_m / kOutlierBearing_rad (not fitted)
+  long windows = 0;       ///< drive windows used
 };
 
 /// Fits one robot's camera and drive to its log against ground truth. Throws std::runtime_error

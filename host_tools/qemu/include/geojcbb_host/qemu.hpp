@@ -25,7 +25,7 @@ struct QemuOptions {
   std::string qemu = "qemu-system-arm";
   std::string machine = "mps2-an386";
   std::string elf;
-  bool icount = true;      ///< -icount shift=0: one instruction per virtual ns (deterministic counts)
+  bool icount = true;  ///< -icount shift=0: one instruction per virtual ns (deterministic counts)
   int start_timeout_ms = 10000;
 };
 
@@ -46,7 +46,7 @@ class QemuMachine {
 
  private:
   void start(const QemuOptions& o);
-  void cleanup();                             ///< kills QEMU if it runs, closes and removes the socket
+  void cleanup();                            ///< kills QEMU if it runs, closes and removes the socket
   std::string qmp(const std::string& json);  ///< sends one command, returns its reply line
   std::string read_line(int timeout_ms);
   pid_t pid_ = -1;

@@ -16,19 +16,19 @@
 namespace geojcbb::host {
 
 struct SceneParams {
-  int observations = 10;           ///< M: observations in the scan (real + clutter)
-  int landmarks = 20;              ///< N: mapped landmarks, all offered as candidates
-  double clutter_fraction = 0.2;   ///< share of the M observations that are clutter
-  double max_range_m = 8.0;        ///< the sensor sees landmarks (and clutter) within this range
+  int observations = 10;          ///< M: observations in the scan (real + clutter)
+  int landmarks = 20;             ///< N: mapped landmarks, all offered as candidates
+  double clutter_fraction = 0.2;  ///< share of the M observations that are clutter
+  double max_range_m = 8.0;       ///< the sensor sees landmarks (and clutter) within this range
   /// Landmarks are mapped within this distance of the robot, all around; 0: only within the field
   /// of view and max_range_m (every landmark observable).
   double map_range_m = 0.0;
   double min_range_m = 0.5;
   double max_abs_bearing_rad = 2.6;  ///< field of view; keeps bearings away from +-pi (MRPT)
-  double min_separation_m = 0.0;   ///< minimum distance between true landmarks (0: none)
-  double sigma_range_m = 0.1;      ///< measurement noise (one R for every observation)
+  double min_separation_m = 0.0;     ///< minimum distance between true landmarks (0: none)
+  double sigma_range_m = 0.1;        ///< measurement noise (one R for every observation)
   double sigma_bearing_rad = 0.0175;
-  double sigma_pose_xy_m = 0.3;    ///< robot's own error
+  double sigma_pose_xy_m = 0.3;  ///< robot's own error
   double sigma_pose_theta_rad = 0.03;
   double sigma_common_xy_m = 0.2;  ///< rigid error shared by the map and the robot
   double sigma_common_theta_rad = 0.02;

@@ -24,23 +24,23 @@ struct Scenario {
   /// The path ends after this long even if its laps are not done [s] (0: no limit). The dense scene
   /// uses it: its map outgrows the host's capacity over a whole lap.
   double duration_s = 0;
-  double speed_mps = 3.0;           ///< commanded forward speed
-  double max_turn_rate_radps = 0.5; ///< steering saturation
-  double turn_gain = 2.0;           ///< w = gain * heading error (saturated)
-  double waypoint_radius_m = 1.0;   ///< switch to the next waypoint within this distance
-  double dt_s = 0.025;              ///< control interval
-  int observe_every = 8;            ///< a scan every this many control intervals (0.2 s)
-  double sigma_v_mps = 0.3;         ///< odometry noise (Bailey: speed 0.3 m/s)
-  double sigma_w_radps = 0.04;      ///< (Bailey: steering 3 deg on a 4 m wheelbase at 3 m/s)
+  double speed_mps = 3.0;            ///< commanded forward speed
+  double max_turn_rate_radps = 0.5;  ///< steering saturation
+  double turn_gain = 2.0;            ///< w = gain * heading error (saturated)
+  double waypoint_radius_m = 1.0;    ///< switch to the next waypoint within this distance
+  double dt_s = 0.025;               ///< control interval
+  int observe_every = 8;             ///< a scan every this many control intervals (0.2 s)
+  double sigma_v_mps = 0.3;          ///< odometry noise (Bailey: speed 0.3 m/s)
+  double sigma_w_radps = 0.04;       ///< (Bailey: steering 3 deg on a 4 m wheelbase at 3 m/s)
   double max_range_m = 30.0;
   /// Nearer landmarks are not seen (a laser's blind zone); > 3 sigma_range keeps every simulated
   /// range positive.
   double min_range_m = 1.0;
-  double fov_rad = 3.14159265358979;  ///< full field of view (centred ahead)
-  double sigma_range_m = 0.1;       ///< (Bailey: 0.1 m)
+  double fov_rad = 3.14159265358979;      ///< full field of view (centred ahead)
+  double sigma_range_m = 0.1;             ///< (Bailey: 0.1 m)
   double sigma_bearing_rad = 0.01745329;  ///< (Bailey: 1 deg)
   double detection_probability = 1.0;
-  double clutter_per_scan = 0.0;    ///< mean of a Poisson count per scan
+  double clutter_per_scan = 0.0;  ///< mean of a Poisson count per scan
   /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas
   /// above. 0 gives a noise-free run of a filter that still expects noise.
   double noise_scale = 1.0;

@@ -13,11 +13,8 @@
 namespace geojcbb::proto {
 
 /// Worst-case COBS size of n bytes, without the delimiter: n + ceil(n / 254), and 1 for n = 0.
-constexpr std::size_t cobs_max_encoded_size(std::size_t n) {
-  return n + (n == 0 ? 1 : (n + 253) / 254);
-}
-static_assert(cobs_max_encoded_size(1) == 2 && cobs_max_encoded_size(254) == 255 &&
-              cobs_max_encoded_size(255) == 257);
+constexpr std::size_t cobs_max_encoded_size(std::size_t n) { return n + (n == 0 ? 1 : (n + 253) / 254); }
+static_assert(cobs_max_encoded_size(1) == 2 && cobs_max_encoded_size(254) == 255 && cobs_max_encoded_size(255) == 257);
 
 /// Streams bytes into [out, out + cap) as COBS (no delimiter). Each block is a code byte followed by
 /// up to 254 non-zero bytes; code c means "c - 1 data bytes follow, then a 0x00 unless c is 0xFF or
@@ -80,8 +77,8 @@ class CobsEncoder {
 
 /// COBS-encodes [src, src + n) into [dst, dst + cap) (no delimiter).
 /// @return kOk with out_len set; kBufferTooSmall (out_len untouched).
-[[nodiscard]] inline Error cobs_encode(const std::uint8_t* src, std::size_t n, std::uint8_t* dst,
-                                       std::size_t cap, std::size_t& out_len) {
+[[nodiscard]] inline Error cobs_encode(const std::uint8_t* src, std::size_t n, std::uint8_t* dst, std::size_t cap,
+                                       std::size_t& out_len) {
   if (src == nullptr && n > 0) return Error::kBadLength;
   CobsEncoder enc(dst, cap);
   enc.put(src, n);
@@ -95,8 +92,8 @@ class CobsEncoder {
 /// (in place): every output byte is written at or before the input byte it came from.
 /// @return kOk with out_len set; kBadLength for an empty input, a 0x00 inside the input or a block
 ///         that runs past the end; kBufferTooSmall. out_len is untouched on error (dst may not be).
-[[nodiscard]] inline Error cobs_decode(const std::uint8_t* src, std::size_t n, std::uint8_t* dst,
-                                       std::size_t cap, std::size_t& out_len) {
+[[nodiscard]] inline Error cobs_decode(const std::uint8_t* src, std::size_t n, std::uint8_t* dst, std::size_t cap,
+                                       std::size_t& out_len) {
   if (src == nullptr || dst == nullptr || n == 0) return Error::kBadLength;
   std::size_t in = 0;
   std::size_t out = 0;

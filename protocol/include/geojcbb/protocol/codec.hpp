@@ -26,8 +26,7 @@ template <class Msg>
   std::size_t n = 0;
   const Error e = m.encode(payload.data(), payload.size(), n);
   if (e != Error::kOk) return e;
-  return encode_frame(static_cast<std::uint8_t>(Msg::kType), seq, frame_flags, payload.data(), n, out, cap,
-                      written);
+  return encode_frame(static_cast<std::uint8_t>(Msg::kType), seq, frame_flags, payload.data(), n, out, cap, written);
 }
 template <class Msg>
 [[nodiscard]] Error encode_message(const Msg& m, std::uint16_t seq, std::uint8_t frame_flags, EncodedFrame& out) {

@@ -8,24 +8,24 @@
 
 namespace geojcbb::proto {
 
-enum class [[nodiscard]] Error : std::uint8_t {
-  kOk = 0,
-  kIncomplete = 1,            ///< Decoder::push: no complete frame yet (not a fault, never counted)
-  kBadLength = 2,             ///< COBS error, frame too short, len field or payload size inconsistent
-  kBadCrc = 3,                ///< CRC-32C mismatch
-  kOverrun = 4,               ///< frame longer than the receive buffer before its delimiter
-  kBadVersion = 5,            ///< protocol major version not ours
-  kBadFlags = 6,              ///< an incompatible flag we do not know
-  kUnknownType = 7,           ///< message type number not in the schema
-  kWrongType = 8,             ///< a known type, but not the one the caller asked to decode
-  kNonFinite = 9,             ///< NaN or Inf in a float field that must be finite
-  kOutOfRange = 10,           ///< a field outside its valid range (see docs/protocol.md)
-  kCapacityExceeded = 11,     ///< a count over a compile-time capacity
-  kNotPositiveDefinite = 12,  ///< a covariance that is not positive definite
-  kBufferTooSmall = 13,       ///< caller's output buffer cannot hold the result
-  kSchemaMismatch = 14,       ///< HELLO with another schema hash
-  kNotReady = 15,             ///< device: a stream message before CONFIG and RESET
-  kInternal = 16,             ///< device: the pipeline refused a valid message
+enum class [[nodiscard]] Error : std::uint8_t{
+    kOk = 0,
+    kIncomplete = 1,            ///< Decoder::push: no complete frame yet (not a fault, never counted)
+    kBadLength = 2,             ///< COBS error, frame too short, len field or payload size inconsistent
+    kBadCrc = 3,                ///< CRC-32C mismatch
+    kOverrun = 4,               ///< frame longer than the receive buffer before its delimiter
+    kBadVersion = 5,            ///< protocol major version not ours
+    kBadFlags = 6,              ///< an incompatible flag we do not know
+    kUnknownType = 7,           ///< message type number not in the schema
+    kWrongType = 8,             ///< a known type, but not the one the caller asked to decode
+    kNonFinite = 9,             ///< NaN or Inf in a float field that must be finite
+    kOutOfRange = 10,           ///< a field outside its valid range (see docs/protocol.md)
+    kCapacityExceeded = 11,     ///< a count over a compile-time capacity
+    kNotPositiveDefinite = 12,  ///< a covariance that is not positive definite
+    kBufferTooSmall = 13,       ///< caller's output buffer cannot hold the result
+    kSchemaMismatch = 14,       ///< HELLO with another schema hash
+    kNotReady = 15,             ///< device: a stream message before CONFIG and RESET
+    kInternal = 16,             ///< device: the pipeline refused a valid message
 };
 /// One past the largest value; a u8 on the wire at or above this is not an Error.
 constexpr std::uint8_t kErrorCount = 17;

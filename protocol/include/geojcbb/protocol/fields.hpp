@@ -133,8 +133,8 @@ struct Field {
   const char* name;
   T R::*member;
   Range range;
-  const char* unit;  ///< for the docs ("" when none; names carry units too: x_m)
-  const char* note;  ///< for the docs (not part of the schema text)
+  const char* unit;               ///< for the docs ("" when none; names carry units too: x_m)
+  const char* note;               ///< for the docs (not part of the schema text)
   const char* const* elem_names;  ///< std::array<float, N>: the wire name of each element
 };
 
@@ -158,19 +158,19 @@ struct IsFloatArray<std::array<float, N>> : std::true_type {};
 template <class R, class T>
 constexpr Field<R, T> field(const char* name, T R::*member, Range r = range::any(), const char* unit = "",
                             const char* note = "") {
-  static_assert(!detail::IsFloatArray<T>::value, "an array of floats names its elements: field(name, member, range, unit, note, names)");
+  static_assert(!detail::IsFloatArray<T>::value,
+                "an array of floats names its elements: field(name, member, range, unit, note, names)");
   return Field<R, T>{name, member, r, unit, note, nullptr};
 }
 /// An array of floats: N f32 on the wire, each with its own name (p00 ... p22).
 template <class R, std::size_t N>
 constexpr Field<R, std::array<float, N>> field(const char* name, std::array<float, N> R::*member, Range r,
-                                               const char* unit, const char* note,
-                                               const char* const (&elem_names)[N]) {
+                                               const char* unit, const char* note, const char* const (&elem_names)[N]) {
   return Field<R, std::array<float, N>>{name, member, r, unit, note, elem_names};
 }
 template <class R, class C, class Item, std::size_t N>
-constexpr List<R, C, Item, N> list(const char* name, C R::*count, std::array<Item, N> R::*items,
-                                   const char* items_name, const char* note = "") {
+constexpr List<R, C, Item, N> list(const char* name, C R::*count, std::array<Item, N> R::*items, const char* items_name,
+                                   const char* note = "") {
   static_assert(std::is_same_v<C, std::uint8_t>, "a list's count is a u8");
   static_assert(N >= 1 && N <= 255, "count is a u8");
   return List<R, C, Item, N>{name, count, items, items_name, note};
@@ -498,13 +498,13 @@ constexpr std::size_t max_payload_size() {
 struct FieldInfo {
   const char* name = "";
   WireType type = WireType::kU8;
-  std::size_t count = 1;                  ///< elements (std::array<float, N>) or characters (text)
+  std::size_t count = 1;  ///< elements (std::array<float, N>) or characters (text)
   const char* const* elem_names = nullptr;
   Range range{};
   const char* unit = "";
   const char* note = "";
-  bool item = false;                      ///< a field of the list's items
-  const char* items_name = "";            ///< item fields: the list member (obs, pairs)
+  bool item = false;            ///< a field of the list's items
+  const char* items_name = "";  ///< item fields: the list member (obs, pairs)
   [[nodiscard]] constexpr std::size_t bytes() const {
     return type == WireType::kText ? count : wire_size(type) * count;
   }
@@ -513,8 +513,8 @@ struct FieldInfo {
 namespace detail {
 template <class R, class T>
 constexpr FieldInfo info_of(const Field<R, T>& f, bool item, const char* items_name) {
-  return FieldInfo{f.name, WireOf<T>::kType, WireOf<T>::kCount, f.elem_names, f.range, f.unit, f.note, item,
-                   items_name};
+  return FieldInfo{f.name, WireOf<T>::kType, WireOf<T>::kCount, f.elem_names, f.range, f.unit, f.note,
+                   item,   items_name};
 }
 template <class R, class C, class Item, std::size_t N>
 constexpr FieldInfo info_of(const List<R, C, Item, N>& f, bool, const char*) {
@@ -542,7 +542,8 @@ constexpr std::array<FieldInfo, info_count<M>()> field_infos() {
   detail::append_infos<M>(out, k, false, "");
   if constexpr (detail::has_list<M>()) {
     using L = detail::ListOf<M>;
-    detail::append_infos<typename L::Item>(out, k, true, std::get<detail::field_count<M>() - 1>(M::fields()).items_name);
+    detail::append_infos<typename L::Item>(out, k, true,
+                                           std::get<detail::field_count<M>() - 1>(M::fields()).items_name);
   }
   return out;
 }

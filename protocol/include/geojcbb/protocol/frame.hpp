@@ -22,7 +22,7 @@ constexpr std::uint8_t kProtocolVersion = 1;  ///< major version; a receiver dro
 constexpr std::size_t kHeaderSize = 8;
 constexpr std::size_t kCrcSize = 4;
 constexpr std::size_t kMaxPayload = 1024;
-constexpr std::size_t kMinFrameSize = kHeaderSize + kCrcSize;          ///< empty payload: 12
+constexpr std::size_t kMinFrameSize = kHeaderSize + kCrcSize;                ///< empty payload: 12
 constexpr std::size_t kMaxFrameSize = kHeaderSize + kMaxPayload + kCrcSize;  ///< 1036
 /// Largest COBS body a valid frame can have (what the decoder buffers before the delimiter).
 constexpr std::size_t kMaxEncodedBody = cobs_max_encoded_size(kMaxFrameSize);  ///< 1041

@@ -114,15 +114,14 @@ struct Capabilities : Codec<Capabilities> {
   std::uint16_t max_candidates = 1;    ///< map features offered to one association
   std::uint8_t max_groups = 1;
   std::uint16_t max_landmarks = 1;
-  std::uint32_t max_jcbb_nodes = 1;    ///< per scan
-  std::uint8_t scalar_bytes = 4;       ///< 4: float, 8: double
-  std::uint32_t boot_id = 0;           ///< changes at every boot (a host sees a reset)
+  std::uint32_t max_jcbb_nodes = 1;                 ///< per scan
+  std::uint8_t scalar_bytes = 4;                    ///< 4: float, 8: double
+  std::uint32_t boot_id = 0;                        ///< changes at every boot (a host sees a reset)
   std::array<char, kFirmwareIdSize> firmware_id{};  ///< printable ASCII, zero padded
 
   static constexpr auto fields() {
     return std::make_tuple(
-        field("protocol_version", &Capabilities::protocol_version),
-        field("schema_hash", &Capabilities::schema_hash),
+        field("protocol_version", &Capabilities::protocol_version), field("schema_hash", &Capabilities::schema_hash),
         field("max_observations", &Capabilities::max_observations, range::at_least(1), "", "per scan"),
         field("max_candidates", &Capabilities::max_candidates, range::at_least(1)),
         field("max_groups", &Capabilities::max_groups, range::at_least(1)),
@@ -130,7 +129,8 @@ struct Capabilities : Codec<Capabilities> {
         field("max_jcbb_nodes", &Capabilities::max_jcbb_nodes, range::at_least(1), "", "per scan"),
         field("scalar_bytes", &Capabilities::scalar_bytes, range::one_of(4, 8), "B", "4 float, 8 double"),
         field("boot_id", &Capabilities::boot_id, range::any(), "", "changes at every boot"),
-        field("firmware_id", &Capabilities::firmware_id, range::text(), "", "printable ASCII (0x20–0x7E), then zero padding only"));
+        field("firmware_id", &Capabilities::firmware_id, range::text(), "",
+              "printable ASCII (0x20–0x7E), then zero padding only"));
   }
 
   /// Copies text into firmware_id (truncated to 16 bytes, zero padded).
@@ -143,7 +143,15 @@ struct Capabilities : Codec<Capabilities> {
 };
 
 /// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/node.hpp static_asserts it).
-enum class StrategyCode : std::uint8_t { kIcnn = 0, kJcbb = 1, kKjcbb = 2, kDfjcbb = 3, kGemjcbb = 4, kGeojcbb = 5, kPcjcbb = 6 };
+enum class StrategyCode : std::uint8_t {
+  kIcnn = 0,
+  kJcbb = 1,
+  kKjcbb = 2,
+  kDfjcbb = 3,
+  kGemjcbb = 4,
+  kGeojcbb = 5,
+  kPcjcbb = 6
+};
 constexpr std::uint8_t kStrategyCodeCount = 7;
 
 /// CONFIG, host -> device (acknowledged): association strategy, gates, sensor model and landmark
@@ -154,19 +162,19 @@ struct Config : Codec<Config> {
   static constexpr const char* kRule = "max_range_m>min_range_m";
 
   StrategyCode strategy = StrategyCode::kGeojcbb;
-  float confidence = 0.99f;          ///< chi-square level of the compatibility tests, (0, 1)
-  float new_landmark_level = 0.999f; ///< level beyond which an observation is a new landmark, (0, 1)
-  float local_radius_m = 10.0f;      ///< local region radius r + d, > 0
-  std::uint8_t groups = 3;           ///< K for k-means / GMM-EM (0: chosen by BIC)
+  float confidence = 0.99f;           ///< chi-square level of the compatibility tests, (0, 1)
+  float new_landmark_level = 0.999f;  ///< level beyond which an observation is a new landmark, (0, 1)
+  float local_radius_m = 10.0f;       ///< local region radius r + d, > 0
+  std::uint8_t groups = 3;            ///< K for k-means / GMM-EM (0: chosen by BIC)
   bool condition_groups = false;
-  float dbscan_eps_m = 1.5f;         ///< > 0
-  std::uint8_t dbscan_min_points = 2;  ///< >= 1
-  std::uint32_t node_budget = 4000;  ///< JCBB nodes per scan, >= 1
-  float min_range_m = 0.0f;          ///< >= 0
-  float max_range_m = 10.0f;         ///< > min_range_m
-  float half_fov_rad = kPiF;         ///< (0, pi]
-  std::uint8_t confirm_hits = 2;     ///< hits that confirm a tentative landmark, >= 1
-  std::uint8_t max_misses = 3;       ///< misses in view that remove a tentative landmark, >= 1
+  float dbscan_eps_m = 1.5f;               ///< > 0
+  std::uint8_t dbscan_min_points = 2;      ///< >= 1
+  std::uint32_t node_budget = 4000;        ///< JCBB nodes per scan, >= 1
+  float min_range_m = 0.0f;                ///< >= 0
+  float max_range_m = 10.0f;               ///< > min_range_m
+  float half_fov_rad = kPiF;               ///< (0, pi]
+  std::uint8_t confirm_hits = 2;           ///< hits that confirm a tentative landmark, >= 1
+  std::uint8_t max_misses = 3;             ///< misses in view that remove a tentative landmark, >= 1
   std::uint8_t max_tentative_reviews = 5;  ///< reviews a landmark may stay tentative, >= 1
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
@@ -181,8 +189,7 @@ struct Config : Codec<Config> {
         field("new_landmark_level", &Config::new_landmark_level, range::interval(0.0f, 1.0f, true, true), "",
               "chi-square level beyond which an observation is a new landmark"),
         field("local_radius_m", &Config::local_radius_m, range::above(0.0f), "m", "r + d"),
-        field("groups", &Config::groups, range::any(), "",
-              "0: chosen by BIC; the device checks ≤ its `max_groups`"),
+        field("groups", &Config::groups, range::any(), "", "0: chosen by BIC; the device checks ≤ its `max_groups`"),
         field("condition_groups", &Config::condition_groups, range::one_of(0, 1)),
         field("dbscan_eps_m", &Config::dbscan_eps_m, range::above(0.0f), "m"),
         field("dbscan_min_points", &Config::dbscan_min_points, range::at_least(1)),
@@ -252,7 +259,7 @@ struct Reset : Codec<Reset> {
   static constexpr const char* kName = "RESET";
   static constexpr const char* kRule = "positive-definite";
 
-  float x_m = 0.0f;        ///< world frame
+  float x_m = 0.0f;  ///< world frame
   float y_m = 0.0f;
   float theta_rad = 0.0f;
   /// Pose covariance, upper triangle (p00, p01, p02, p11, p12, p22) over (x, y, theta); positive
@@ -260,12 +267,11 @@ struct Reset : Codec<Reset> {
   std::array<float, 6> cov_upper{1e-6f, 0.0f, 0.0f, 1e-6f, 0.0f, 1e-6f};
 
   static constexpr auto fields() {
-    return std::make_tuple(field("x_m", &Reset::x_m, range::finite(), "m", "world frame"),
-                           field("y_m", &Reset::y_m, range::finite(), "m"),
-                           field("theta_rad", &Reset::theta_rad, range::finite(), "rad"),
-                           field("cov_upper", &Reset::cov_upper, range::finite(), "",
-                                 "P over (x, y, theta), symmetric by construction: positive definite",
-                                 detail::kCovUpperNames));
+    return std::make_tuple(
+        field("x_m", &Reset::x_m, range::finite(), "m", "world frame"), field("y_m", &Reset::y_m, range::finite(), "m"),
+        field("theta_rad", &Reset::theta_rad, range::finite(), "rad"),
+        field("cov_upper", &Reset::cov_upper, range::finite(), "",
+              "P over (x, y, theta), symmetric by construction: positive definite", detail::kCovUpperNames));
   }
   [[nodiscard]] Error rule() const { return detail::spd3(cov_upper) ? Error::kOk : Error::kNotPositiveDefinite; }
 };
@@ -396,10 +402,9 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
   std::array<PairingWire, MaxObs> pairs{};
 
   static constexpr auto fields() {
-    return std::make_tuple(
-        field("batch_id", &AssocResultT::batch_id, range::any(), "", "the OBS_BATCH's"),
-        list("count", &AssocResultT::count, &AssocResultT::pairs, "pairs",
-             "≤ `MaxObs`, and `len` = fixed + item size · count exactly"));
+    return std::make_tuple(field("batch_id", &AssocResultT::batch_id, range::any(), "", "the OBS_BATCH's"),
+                           list("count", &AssocResultT::count, &AssocResultT::pairs, "pairs",
+                                "≤ `MaxObs`, and `len` = fixed + item size · count exactly"));
   }
 };
 using AssocResult = AssocResultT<>;
@@ -419,15 +424,14 @@ struct Pose : Codec<Pose> {
   std::uint16_t landmark_count = 0;
 
   static constexpr auto fields() {
-    return std::make_tuple(field("batch_id", &Pose::batch_id),
-                           field("x_m", &Pose::x_m, range::finite(), "m", "world frame"),
-                           field("y_m", &Pose::y_m, range::finite(), "m"),
-                           field("theta_rad", &Pose::theta_rad, range::finite(), "rad"),
-                           field("cov_upper", &Pose::cov_upper, range::finite(), "",
-                                 "diagonal ≥ 0: the pose reports what the filter holds, the host judges its "
-                                 "consistency",
-                                 detail::kCovUpperNames),
-                           field("landmark_count", &Pose::landmark_count));
+    return std::make_tuple(
+        field("batch_id", &Pose::batch_id), field("x_m", &Pose::x_m, range::finite(), "m", "world frame"),
+        field("y_m", &Pose::y_m, range::finite(), "m"), field("theta_rad", &Pose::theta_rad, range::finite(), "rad"),
+        field("cov_upper", &Pose::cov_upper, range::finite(), "",
+              "diagonal ≥ 0: the pose reports what the filter holds, the host judges its "
+              "consistency",
+              detail::kCovUpperNames),
+        field("landmark_count", &Pose::landmark_count));
   }
   [[nodiscard]] Error rule() const {
     return (cov_upper[0] >= 0.0f && cov_upper[3] >= 0.0f && cov_upper[5] >= 0.0f) ? Error::kOk : Error::kOutOfRange;
@@ -463,7 +467,7 @@ struct Stats : Codec<Stats> {
   std::uint32_t instr_associate = 0;
   std::uint32_t instr_update = 0;
   std::uint32_t instr_augment_review = 0;
-  std::uint32_t instr_step = 0;     ///< the whole step
+  std::uint32_t instr_step = 0;  ///< the whole step
   std::uint32_t stack_high_water_bytes = 0;
 
   static constexpr auto fields() {
@@ -574,9 +578,7 @@ constexpr std::uint32_t current_schema_hash() { return kSchemaHash; }
   if (schema_hash != kSchemaHash) return Error::kSchemaMismatch;
   return Error::kOk;
 }
-[[nodiscard]] constexpr Error check_hello(const Hello& h) {
-  return check_hello(h.protocol_version, h.schema_hash);
-}
+[[nodiscard]] constexpr Error check_hello(const Hello& h) { return check_hello(h.protocol_version, h.schema_hash); }
 
 /// Parses kSchemaText for message `type`.
 constexpr SchemaLayout schema_layout(std::uint8_t type) { return schema_layout(kSchemaText, kSchemaTextLength, type); }
@@ -594,9 +596,9 @@ constexpr bool all_match_schema(MessageList<M...>) {
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 41 &&
-              Reset::kPayloadSize == 36 && Odometry::kPayloadSize == 20 && Pose::kPayloadSize == 42 &&
-              Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
-              AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
+                  Reset::kPayloadSize == 36 && Odometry::kPayloadSize == 20 && Pose::kPayloadSize == 42 &&
+                  Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
+                  AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto

@@ -192,7 +192,7 @@ constexpr void render_message_line(FixedText<N>& t) {
       repeated = true;
     }
     if (f.type == WireType::kF32 && f.count > 1) {
-      for (std::size_t i = 0; i < f.count; ++i) {  // <= the array's length
+      for (std::size_t i = 0; i < f.count; ++i) {        // <= the array's length
         detail::put_field_token(t, f.elem_names[i], f);  // field() requires a name per element
       }
     } else {
@@ -226,8 +226,8 @@ constexpr std::uint32_t message_hash() {
 /// Payload layout of one message as a schema text states it.
 struct SchemaLayout {
   bool found = false;
-  std::size_t fixed_bytes = 0;     ///< fields before "repeat" (all of them when there is none)
-  std::size_t item_bytes = 0;      ///< fields after "repeat" (0: no counted list)
+  std::size_t fixed_bytes = 0;  ///< fields before "repeat" (all of them when there is none)
+  std::size_t item_bytes = 0;   ///< fields after "repeat" (0: no counted list)
 };
 
 namespace detail {
@@ -275,9 +275,8 @@ constexpr SchemaLayout schema_layout(const char* text, std::size_t length, std::
   while (p < end) {  // one line per pass, <= length
     const char* eol = p;
     while (eol < end && *eol != '\n') ++eol;  // <= line length
-    const bool is_msg = eol - p > 9 && p[0] == 'm' && p[1] == 's' && p[2] == 'g' && p[3] == ' ' &&
-                        p[4] == '0' && p[5] == 'x' && detail::hex_digit(p[6]) >= 0 &&
-                        detail::hex_digit(p[7]) >= 0;
+    const bool is_msg = eol - p > 9 && p[0] == 'm' && p[1] == 's' && p[2] == 'g' && p[3] == ' ' && p[4] == '0' &&
+                        p[5] == 'x' && detail::hex_digit(p[6]) >= 0 && detail::hex_digit(p[7]) >= 0;
     if (is_msg && detail::hex_digit(p[6]) * 16 + detail::hex_digit(p[7]) == type) {
       out.found = true;
       bool repeated = false;

@@ -25,9 +25,7 @@ constexpr void put_u32_le(std::uint8_t* p, std::uint32_t v) {
   p[2] = static_cast<std::uint8_t>((v >> 16) & 0xFFu);
   p[3] = static_cast<std::uint8_t>(v >> 24);
 }
-constexpr std::uint16_t get_u16_le(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-}
+constexpr std::uint16_t get_u16_le(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
 constexpr std::uint32_t get_u32_le(const std::uint8_t* p) {
   return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
          (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
@@ -117,8 +115,7 @@ class Reader {
   std::int32_t i32() {
     const std::uint32_t u = u32();
     // Two's complement without implementation-defined narrowing.
-    return u <= 0x7FFFFFFFu ? static_cast<std::int32_t>(u)
-                            : -static_cast<std::int32_t>(~u) - 1;
+    return u <= 0x7FFFFFFFu ? static_cast<std::int32_t>(u) : -static_cast<std::int32_t>(~u) - 1;
   }
   float f32() { return bits_float(u32()); }
   void bytes(std::uint8_t* out, std::size_t n) {
