@@ -42,7 +42,7 @@ extern "C" {
     long double align_ld;                   \
     double align_d;                         \
     uint64_t align_u64;                     \
-  } name __attribute__((aligned(GEOJCBB_STORAGE_ALIGN)))
+  } name /* NOLINT(bugprone-macro-parentheses): a declarator */ __attribute__((aligned(GEOJCBB_STORAGE_ALIGN)))
 
 /* Mirrors geojcbb::Status (core/status.hpp), value for value. */
 typedef enum geojcbb_status {
@@ -128,7 +128,7 @@ geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strat
  *       row-major, candidate j at rows 2j, 2j+1
  * @return OK; CAPACITY_EXCEEDED for m or n over capacity; the statuses of associate() (its
  * validation, NOT_POSITIVE_DEFINITE). *out is written only on OK. */
-geojcbb_status geojcbb_associate(geojcbb_associator* a, int m, const float* z, const float* R, int n,
+geojcbb_status geojcbb_associate(geojcbb_associator* handle, int m, const float* z, const float* R, int n,
                                  const int32_t* ids, const float* h, const float* C, geojcbb_association* out);
 
 /* ---- EKF-SLAM step (geojcbb::node::SlamStep<float, DefaultBounds>) ---- */
@@ -169,19 +169,19 @@ typedef struct geojcbb_step_result {
 /* Places an unconfigured SLAM step in `storage`. @return OK; INVALID_INPUT for bad storage. */
 geojcbb_status geojcbb_slam_init(void* storage, size_t size, geojcbb_slam** out);
 /* @return OK; INVALID_INPUT for bad settings; the statuses of make_strategy. */
-geojcbb_status geojcbb_slam_configure(geojcbb_slam* s, const geojcbb_slam_settings* settings);
+geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* settings);
 /* Clears the map. x0 = (x [m], y [m], theta [rad]); P0 3x3 row-major. */
-geojcbb_status geojcbb_slam_reset(geojcbb_slam* s, const float x0[3], const float P0[9]);
+geojcbb_status geojcbb_slam_reset(geojcbb_slam* handle, const float x0[3], const float P0[9]);
 /* One odometry interval: v [m/s], w [rad/s], dt [s] >= 0, their standard deviations (> 0). */
-geojcbb_status geojcbb_slam_predict(geojcbb_slam* s, float v_mps, float w_radps, float dt_s, float sigma_v_mps,
+geojcbb_status geojcbb_slam_predict(geojcbb_slam* handle, float v_mps, float w_radps, float dt_s, float sigma_v_mps,
                                     float sigma_w_radps);
 /* One scan (z, R as in geojcbb_associate). *out is written only on OK. */
-geojcbb_status geojcbb_slam_step(geojcbb_slam* s, int m, const float* z, const float* R, geojcbb_step_result* out);
+geojcbb_status geojcbb_slam_step(geojcbb_slam* handle, int m, const float* z, const float* R, geojcbb_step_result* out);
 /* The pose estimate (x, y, theta) and the map. */
-void geojcbb_slam_pose(const geojcbb_slam* s, float x[3]);
-int geojcbb_slam_landmarks(const geojcbb_slam* s);
+void geojcbb_slam_pose(const geojcbb_slam* handle, float x[3]);
+int geojcbb_slam_landmarks(const geojcbb_slam* handle);
 /* Landmark j (0 <= j < geojcbb_slam_landmarks()): its id and position [m]. INVALID_INPUT for a bad j. */
-geojcbb_status geojcbb_slam_landmark(const geojcbb_slam* s, int j, int32_t* id, float xy[2]);
+geojcbb_status geojcbb_slam_landmark(const geojcbb_slam* handle, int j, int32_t* id, float xy[2]);
 
 #ifdef __cplusplus
 }

@@ -235,24 +235,25 @@ static Slam* slam_of(geojcbb_slam* handle) {
   return s != nullptr && s->magic == kSlamMagic ? s : nullptr;
 }
 
-geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* in) {
+geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* settings) {
   Slam* s = slam_of(handle);
-  if (s == nullptr || in == nullptr || !strategy_ok(static_cast<int>(in->strategy))) return GEOJCBB_INVALID_INPUT;
+  if (s == nullptr || settings == nullptr || !strategy_ok(static_cast<int>(settings->strategy)))
+    return GEOJCBB_INVALID_INPUT;
   node::StepSettings<float>& st = s->settings;
   st = node::StepSettings<float>{};
-  st.strategy = static_cast<Strategy>(in->strategy);
-  st.params = to_params(in->params);
-  st.new_landmark_level = in->new_landmark_level;
-  st.view.min_range_m = in->min_range_m;
-  st.view.max_range_m = in->max_range_m;
-  st.view.half_fov_rad = in->half_fov_rad;
-  st.policy.confirm_hits = in->confirm_hits;
-  st.policy.max_misses = in->max_misses;
-  st.policy.max_tentative_reviews = in->max_tentative_reviews;
-  st.policy.miss_probability = in->miss_probability;
-  st.policy.static_gate_d2 = in->static_gate_d2;
-  st.filter.first_estimates_jacobians = in->first_estimates_jacobians != 0;
-  st.augment = in->augment != 0;
+  st.strategy = static_cast<Strategy>(settings->strategy);
+  st.params = to_params(settings->params);
+  st.new_landmark_level = settings->new_landmark_level;
+  st.view.min_range_m = settings->min_range_m;
+  st.view.max_range_m = settings->max_range_m;
+  st.view.half_fov_rad = settings->half_fov_rad;
+  st.policy.confirm_hits = settings->confirm_hits;
+  st.policy.max_misses = settings->max_misses;
+  st.policy.max_tentative_reviews = settings->max_tentative_reviews;
+  st.policy.miss_probability = settings->miss_probability;
+  st.policy.static_gate_d2 = settings->static_gate_d2;
+  st.filter.first_estimates_jacobians = settings->first_estimates_jacobians != 0;
+  st.augment = settings->augment != 0;
   return c_status(s->step.configure(st));
 }
 

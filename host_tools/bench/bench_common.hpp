@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdint>
 #include <string>
@@ -35,7 +36,8 @@ struct BenchOptions {
 inline double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  const std::size_t k =
+      std::min(v.size() - 1, static_cast<std::size_t>(std::llround(q * static_cast<double>(v.size() - 1))));
   return v[k];
 }
 

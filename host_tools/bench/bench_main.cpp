@@ -6,8 +6,11 @@
 #include <CLI/CLI.hpp>
 
 #include "bench_common.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   using geojcbb::bench::BenchOptions;
   CLI::App app{"geojcbb association benchmark (timing is measured, never asserted)"};
   BenchOptions o;
@@ -38,3 +41,7 @@ int main(int argc, char** argv) {
   }
   return rc;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

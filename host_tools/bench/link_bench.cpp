@@ -20,6 +20,7 @@
 #include "geojcbb/node/node.hpp"
 #include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/stream.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -91,7 +92,9 @@ double in_process(const std::vector<Messages>& runs, long& scans) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"link_bench: end-to-end scans per second over the serial link, against the in-process step"};
   std::string scenario = std::string(GEOJCBB_SCENARIO_DIR) + "/dense.json";
   std::vector<std::string> names{"GEOJCBB", "JCBB"};
@@ -152,6 +155,7 @@ int main(int argc, char** argv) {
       RunOptions o;
       o.strategy = strategy;
       std::vector<Messages> msgs;
+      msgs.reserve(sources.size());
       for (RecordedSource& s : sources) msgs.push_back(messages(s, o, max_obs));
       double best_in = 1e30;
       long scans = 0;
@@ -193,3 +197,7 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

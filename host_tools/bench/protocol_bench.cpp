@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "geojcbb/protocol/protocol.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 namespace {
 
@@ -38,7 +39,9 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"geojcbb protocol benchmark (timing is measured, never asserted)"};
   int frames = 2000;
   int repeat = 50;
@@ -144,3 +147,7 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

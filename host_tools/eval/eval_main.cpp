@@ -42,6 +42,7 @@
 #include "geojcbb_host/slam_run.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/svg_plot.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -574,7 +575,9 @@ int with_device(const LinkCli& lc, bool oracle, Run&& run) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{
       "geojcbb evaluation: EKF-SLAM with every association strategy, scored "
       "against ground truth, "
@@ -822,3 +825,7 @@ int main(int argc, char** argv) {
     return 2;
   }
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

@@ -12,12 +12,15 @@
 #include <CLI/CLI.hpp>
 
 #include "geojcbb_host/link.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
 }
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"geojcbb_device: the device loop of the firmware (float) on a serial port or a pseudo-terminal"};
   std::string port;
   bool pty = false;
@@ -74,3 +77,7 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

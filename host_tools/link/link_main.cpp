@@ -13,11 +13,14 @@
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/stream.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"geojcbb_link: stream a simulated scenario through a device over a serial link and score the replies"};
   std::string scenario = std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json";
   LinkCli lc;
@@ -80,3 +83,7 @@ int main(int argc, char** argv) {
   }
   return rc;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

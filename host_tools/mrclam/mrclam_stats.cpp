@@ -10,6 +10,7 @@
 
 #include "geojcbb_host/mrclam.hpp"
 #include "geojcbb_host/mrclam_calibration.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 namespace {
 
@@ -67,7 +68,9 @@ std::string format(const char* fmt, T v) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"UTIAS MRCLAM datasets 6 and 7: counts, and noise against ground truth"};
   std::string root = default_data_dir();
   double window_s = 1.0;
@@ -142,3 +145,7 @@ int main(int argc, char** argv) {
   std::printf("\nOdometry residuals compare %g s averages of the commanded (v, w) with ground truth.\n", window_s);
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

@@ -16,6 +16,7 @@
 #include "geojcbb_host/mirror.hpp"
 #include "geojcbb_host/qemu.hpp"
 #include "geojcbb_host/stream.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -128,7 +129,9 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"geojcbb_qemu: stream a simulated scenario through the Cortex-M4F firmware on QEMU's mps2-an386"};
   QemuOptions q;
   q.elf = GEOJCBB_FIRMWARE_ELF;
@@ -252,3 +255,7 @@ int main(int argc, char** argv) {
   }
   return rc;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

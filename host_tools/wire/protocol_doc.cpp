@@ -15,6 +15,7 @@
 #include <string>
 
 #include "geojcbb/protocol/protocol.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 namespace {
 
@@ -129,7 +130,9 @@ bool find_block(const std::string& text, std::size_t& b, std::size_t& e) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"docs/protocol.md's message tables from the protocol's message descriptions"};
   std::string check;
   std::string update;
@@ -186,3 +189,7 @@ int main(int argc, char** argv) {
   std::cout << path << ": message tables rewritten\n";
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

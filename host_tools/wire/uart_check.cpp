@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "geojcbb/protocol/protocol.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 namespace {
 
@@ -141,7 +142,9 @@ int check_output(const Session& s, const std::string& path, std::optional<std::u
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"The QEMU smoke session: its input bytes, and the check of the firmware's UART output"};
   std::string session_path;
   std::string input_path;
@@ -178,3 +181,7 @@ int main(int argc, char** argv) {
   std::cerr << "give --write-input or --output\n";
   return 2;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

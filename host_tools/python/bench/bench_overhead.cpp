@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "geojcbb/associate.hpp"
+#include "geojcbb_host/guarded_main.hpp"
 
 using namespace geojcbb;
 using PyBounds = Bounds<64, 128, 8, 200000, 500>;  // as host_tools/python/geojcbb_py.cpp
@@ -51,7 +52,9 @@ bool read_scene(std::istream& in, State& s, AssociationConfig<double, PyBounds>&
 }
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   std::unique_ptr<State> s(new State());
   AssociationConfig<double, PyBounds> cfg;
   Status st = Status::kOk;
@@ -87,3 +90,7 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "usage: %s --reference | --bench CALLS  (scene(s) on stdin)\n", argv[0]);
   return 2;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }

@@ -29,21 +29,21 @@ DbscanStats dbscan(const Points<T, B>& pts, int m, T eps, int min_points, Groups
   }
   std::array<int, B::kMaxObservations> raw;  // cluster per point, -1 unvisited/noise
   raw.fill(-1);
-  std::array<std::int8_t, B::kMaxObservations> queue;
+  std::array<std::uint8_t, B::kMaxObservations> queue;  ///< observation indices
   int clusters = 0;
   for (int s = 0; s < m; ++s) {  // <= kMaxObservations
     if (raw[s] >= 0 || neighbours[s] < min_points) continue;
     const int c = clusters++;
     int head = 0, tail = 0;
     raw[s] = c;
-    queue[tail++] = static_cast<std::int8_t>(s);
+    queue[tail++] = static_cast<std::uint8_t>(s);
     while (head < tail) {  // each point is queued at most once: <= kMaxObservations
       const int p = queue[head++];
       if (neighbours[p] < min_points) continue;  // border point: does not expand
       for (int q = 0; q < m; ++q) {              // <= kMaxObservations
         if (raw[q] < 0 && (pts[p] - pts[q]).squaredNorm() <= eps2) {
           raw[q] = c;
-          queue[tail++] = static_cast<std::int8_t>(q);
+          queue[tail++] = static_cast<std::uint8_t>(q);
         }
       }
     }

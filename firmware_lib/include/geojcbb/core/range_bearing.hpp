@@ -28,7 +28,7 @@ Vec2<T> observe(const Pose2<T>& x_r, const Vec2<T>& l, Mat23<T>* J_z_pose = null
   const T dy = l.y() - x_r.y;
   const T q = dx * dx + dy * dy;
   const T r = std::sqrt(q);
-  const Vec2<T> z(r, wrap_angle(fmath::atan2(dy, dx) - x_r.theta));
+  Vec2<T> z(r, wrap_angle(fmath::atan2(dy, dx) - x_r.theta));
   if (J_z_landmark != nullptr || J_z_pose != nullptr) {
     Mat2<T> J_l;
     J_l << dx / r, dy / r,  //

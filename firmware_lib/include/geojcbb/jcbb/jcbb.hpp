@@ -43,11 +43,11 @@ struct SearchOutcome {
 template <typename T, class B>
 struct JcbbWorkspace {
   IncrementalJoint<T, B::kMaxObservations> joint;
-  std::array<std::int8_t, B::kMaxObservations> order;  ///< level -> observation
-  std::array<std::int16_t, B::kMaxObservations> next;  ///< level -> next candidate position
-  std::array<bool, B::kMaxObservations> paired;        ///< level -> holds a pairing
-  Hypothesis<B> current;                               ///< observation -> candidate or -1
-  std::array<std::uint8_t, B::kMaxCandidates> used;    ///< candidate -> pairings holding it
+  std::array<std::uint8_t, B::kMaxObservations> order;  ///< level -> observation
+  std::array<std::int16_t, B::kMaxObservations> next;   ///< level -> next candidate position
+  std::array<bool, B::kMaxObservations> paired;         ///< level -> holds a pairing
+  Hypothesis<B> current;                                ///< observation -> candidate or -1
+  std::array<std::uint8_t, B::kMaxCandidates> used;     ///< candidate -> pairings holding it
 };
 
 /// The observations one search covers: all, or those of one group.
@@ -62,7 +62,7 @@ struct ObservationSubset {
 /// levels.  Bound: insertion sort of <= MaxObservations entries.
 template <typename T, class B>
 int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first, ObservationSubset subset,
-                 std::array<std::int8_t, B::kMaxObservations>& order) {
+                 std::array<std::uint8_t, B::kMaxObservations>& order) {
   int levels = 0;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     if (table.count[i] == 0 || !subset.contains(i)) continue;
@@ -70,7 +70,7 @@ int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first
     for (; fewest_first && k > 0 && table.count[order[k - 1]] > table.count[i]; --k) {
       order[k] = order[k - 1];
     }
-    order[k] = static_cast<std::int8_t>(i);
+    order[k] = static_cast<std::uint8_t>(i);
   }
   return levels;
 }

@@ -57,9 +57,10 @@ static_assert(wire_agreement::same_strategies(), "geojcbb::Strategy and CONFIG's
 static_assert(wire_agreement::same_outcomes(), "node::Outcome and ASSOC_RESULT's outcome, value for value");
 static_assert(kNewFeature == proto::kFeatureNew && kUnmatched == proto::kFeatureUnmatched,
               "ASSOC_RESULT's feature ids NEW and UNMATCHED are the association's");
-static_assert(std::is_same<decltype(proto::Config::node_budget), NodeCount>::value &&
-                  std::is_same<decltype(proto::Capabilities::max_jcbb_nodes), NodeCount>::value,
-              "the wire's node budget is the library's NodeCount");
+static_assert(std::is_same<decltype(proto::Config::node_budget), NodeCount>::value,
+              "CONFIG's node budget is the library's NodeCount");
+static_assert(std::is_same<decltype(proto::Capabilities::max_jcbb_nodes), NodeCount>::value,
+              "CAPABILITIES' node budget is the library's NodeCount");
 static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
               "the wire's default batch size is DefaultBounds' observations per scan");
 
@@ -225,8 +226,9 @@ class Node {
     c.max_jcbb_nodes = B::kMaxJcbbNodes;
     c.scalar_bytes = static_cast<std::uint8_t>(sizeof(T));
     c.boot_id = boot_id_;
-    const char id[] = "geojcbb node";
-    for (std::size_t i = 0; i < sizeof(id) - 1 && i < c.firmware_id.size(); ++i) c.firmware_id[i] = id[i];  // <= 16
+    constexpr char kId[] = "geojcbb node";
+    static_assert(sizeof(kId) - 1 <= sizeof(c.firmware_id), "the id fits CAPABILITIES' field");
+    for (std::size_t i = 0; i < sizeof(kId) - 1; ++i) c.firmware_id[i] = kId[i];  // <= 16
     send(c);
   }
 

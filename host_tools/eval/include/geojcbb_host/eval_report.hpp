@@ -214,6 +214,7 @@ double run_parallel(std::size_t count, int threads, bool progress, Job&& job) {
   std::atomic<std::size_t> next{0}, done{0};
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads));
   for (int k = 0; k < threads; ++k) {
     pool.emplace_back([&] {
       for (std::size_t j = next++; j < count; j = next++) {

@@ -95,11 +95,11 @@ class LogSource : public RecordedSource {
 /// with their R as meas lines (label: the landmark's subject number, or "clutter" for other
 /// robots and unknown barcodes), the ground truth, the surveyed landmarks, the sensor and the
 /// start. Its replay by LogSource equals MrclamSource's.
-EventLog mrclam_to_log(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamModel& model,
+EventLog mrclam_to_log(const mrclam::Dataset& ds, const mrclam::RobotLog& robot, const MrclamModel& model,
                        bool drop_other_robots = false);
 /// A MRCLAM robot's raw data as a log: commands, measurements as logged (label: subject number, or
 /// "clutter"), truth and landmarks; no noise, no model (the replay estimates or is given the noise).
-EventLog mrclam_raw_log(const mrclam::Dataset& ds, const mrclam::RobotLog& log);
+EventLog mrclam_raw_log(const mrclam::Dataset& ds, const mrclam::RobotLog& robot);
 
 /// The first `seconds` of a robot's log (from its first odometry sample); for short replays.
 mrclam::RobotLog truncate(const mrclam::RobotLog& log, double seconds);
