@@ -574,6 +574,26 @@ class Slam {
     }
     stats.removed = n_ - kept;
     if (kept == n_) return Status::kOk;
+    move_kept(keep, kept);
+    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
+      id_[k] = id_[keep[k]];
+      first_[2 * k] = first_[2 * keep[k]];
+      first_[2 * k + 1] = first_[2 * keep[k] + 1];
+      hits_[k] = hits_[keep[k]];
+      misses_[k] = misses_[keep[k]];
+      age_[k] = age_[keep[k]];
+      expected_[k] = expected_[keep[k]];
+      miss_p_[k] = miss_p_[keep[k]];
+      for (int u = 0; u < 3; ++u) init_cov_[3 * k + u] = init_cov_[3 * keep[k] + u];
+    }
+    n_ = kept;
+    return Status::kOk;
+  }
+
+ private:
+  /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Out of
+  /// line so review()'s frame (which holds keep) stays within the 512-byte budget.
+  [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
     auto old_row = [&](int r) {
       return r < Layout::kPoseSize ? r
                                    : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2;
@@ -598,22 +618,7 @@ class Slam {
       }
       x_[c] = x_[ocol];
     }
-    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
-      id_[k] = id_[keep[k]];
-      first_[2 * k] = first_[2 * keep[k]];
-      first_[2 * k + 1] = first_[2 * keep[k] + 1];
-      hits_[k] = hits_[keep[k]];
-      misses_[k] = misses_[keep[k]];
-      age_[k] = age_[keep[k]];
-      expected_[k] = expected_[keep[k]];
-      miss_p_[k] = miss_p_[keep[k]];
-      for (int u = 0; u < 3; ++u) init_cov_[3 * k + u] = init_cov_[3 * keep[k] + u];
-    }
-    n_ = kept;
-    return Status::kOk;
   }
-
- private:
   /// The state and bookkeeping of landmark index n_ at l, whose covariance rows are already set.
   void add_bookkeeping(const Vec2<T>& l) {
     const int k = dim();
