@@ -25,6 +25,7 @@ namespace {
 
 struct Budget {
   std::vector<std::uint32_t> associate, step, observations;
+  std::vector<std::uint32_t> predict_local, update, augment_review;  ///< the step's other stages (CSV only)
   std::vector<std::uint32_t> associate20;  ///< association of scans with at least 20 observations
   std::vector<std::uint32_t> budget_hit;   ///< association of scans that hit the JCBB node budget
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
@@ -61,6 +62,9 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
       const proto::Stats st = link.stats();
       b.associate.push_back(st.instr_associate);
       b.step.push_back(st.instr_step);
+      b.predict_local.push_back(st.instr_predict_local);
+      b.update.push_back(st.instr_update);
+      b.augment_review.push_back(st.instr_augment_review);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -198,7 +202,8 @@ int run(int argc, char** argv) {
     std::ofstream csv;
     if (!budget_csv.empty()) {
       csv.open(budget_csv);
-      csv << "scenario,strategy,scan,observations,instr_associate,instr_step\n";
+      csv << "scenario,strategy,scan,observations,instr_associate,instr_step,instr_predict_local,instr_update,"
+             "instr_augment_review\n";
     }
     for (Strategy s : strategies) {
       MirrorReport mr;
@@ -220,7 +225,8 @@ int run(int argc, char** argv) {
       if (csv.is_open()) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
           csv << '"' << sc.name << "\"," << to_string(s) << ',' << i << ',' << b.observations[i] << ','
-              << b.associate[i] << ',' << b.step[i] << '\n';
+              << b.associate[i] << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ','
+              << b.augment_review[i] << '\n';
         }
       }
       budgets.push_back(std::move(b));

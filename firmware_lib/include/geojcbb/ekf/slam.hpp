@@ -25,6 +25,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "geojcbb/core/association_types.hpp"
@@ -45,6 +46,10 @@ struct Layout {
 /// products; one pair would halve the scratch and cost more instructions per covariance entry.
 constexpr int kUpdateBlockPairs = 2;
 constexpr int kUpdateBlockCols = 2 * kUpdateBlockPairs;
+/// Columns of P the downdate updates per pass (Slam::downdate): with 4 columns of V that is 24 + 4
+/// single-precision registers of the M4F's 32 for V's entries, so nothing spills; the arithmetic
+/// per entry does not depend on it.
+constexpr int kDowndateCols = 6;
 
 /// Caller-owned scratch of predict_local() and update(); typically a static object on the device.
 /// O(n): the update's gain is one block of columns at a time (design.md, "Covariance engine").
@@ -569,18 +574,7 @@ class Slam {
     }
     stats.removed = n_ - kept;
     if (kept == n_) return Status::kOk;
-    auto old_row = [&](int r) {
-      return r < Layout::kPoseSize ? r
-                                   : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2;
-    };
-    const int n = Layout::landmark(kept);
-    // Packed: old_row is increasing, so the source of (r, c), r <= c, lies at or after it in the
-    // column-by-column order; copying in that order reads every source before it is overwritten.
-    for (int c = 0; c < n; ++c) {  // <= kMaxState
-      const int ocol = old_row(c);
-      for (int r = 0; r <= c; ++r) P(r, c) = P(old_row(r), ocol);  // <= kMaxState
-      x_[c] = x_[ocol];
-    }
+    move_kept(keep, kept);
     for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
       id_[k] = id_[keep[k]];
       first_[2 * k] = first_[2 * keep[k]];
@@ -597,6 +591,34 @@ class Slam {
   }
 
  private:
+  /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Out of
+  /// line so review()'s frame (which holds keep) stays within the 512-byte budget.
+  [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
+    auto old_row = [&](int r) {
+      return r < Layout::kPoseSize ? r
+                                   : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2;
+    };
+    const int n = Layout::landmark(kept);
+    // The landmarks before the first removed one keep their index, so the leading rows and columns
+    // of P (and of x) stay where they are: only the columns from there on move.
+    int first = 0;
+    while (first < kept && keep[first] == first) ++first;  // <= kMaxLandmarks
+    const int r_first = Layout::landmark(first);
+    // Packed: old_row is increasing, so the source of (r, c), r <= c, lies at or after it in the
+    // column-by-column order; copying in that order reads every source before it is overwritten.
+    for (int c = r_first; c < n; ++c) {  // <= kMaxState
+      const int ocol = old_row(c);
+      T* dst = &p_[packed_index(0, c)];
+      const T* src = &p_[packed_index(0, ocol)];
+      for (int r = 0; r < r_first; ++r) dst[r] = src[r];    // <= kMaxState: rows that keep their index
+      for (int k = first; Layout::landmark(k) <= c; ++k) {  // <= kMaxLandmarks: two rows per landmark
+        const int r = Layout::landmark(k), o = Layout::landmark(keep[k]);
+        dst[r] = src[o];
+        if (r + 1 <= c) dst[r + 1] = src[o + 1];
+      }
+      x_[c] = x_[ocol];
+    }
+  }
   /// The state and bookkeeping of landmark index n_ at l, whose covariance rows are already set.
   void add_bookkeeping(const Vec2<T>& l) {
     const int k = dim();
@@ -634,29 +656,74 @@ class Slam {
   /// P <- P - V V^T over the packed upper triangle (the K columns of ws.V); a variance that
   /// rounding would take below kMinVarianceRatio of its value before is floored there (raising a
   /// diagonal entry adds a positive semidefinite matrix, so P stays positive definite).  O(n^2 K)
+  /// Every entry gets the same arithmetic whichever loop below computes it: starting from P(r, c),
+  /// K fused multiply-adds in the order t = 0 .. K-1, each correctly rounded,
+  ///   P(r, c) <- fma(V(r, t), -V(c, t), P(r, c))
+  /// (fmadd, std::fma: one VFMA.F32 on the M4F, fmaf on the host, so the two agree bit for bit; negating
+  /// V(c, t) first is exact). The column blocking only shares the loads: kDowndateCols columns per
+  /// pass, so each row of V is loaded once for them and each entry of P once per block.
   void downdate(int n, SlamWorkspace<T, B>& ws) {
     constexpr int K = kUpdateBlockCols;
+    constexpr int C = kDowndateCols;
     const T* v = ws.V.data();
-    for (int c = 0; c < n; ++c) {  // <= kMaxState columns
+    int c0 = 0;
+    for (; c0 + C <= n; c0 += C) {  // <= kMaxState / C column groups
+      T vc[C][K];                   // -V(c0 + j, t): in registers for the whole pass
+      T* pc[C];                     // column c0 + j of the packed triangle, row 0
+      for (int j = 0; j < C; ++j) {
+        pc[j] = &p_[static_cast<std::size_t>(c0 + j) * (c0 + j + 1) / 2];
+        for (int t = 0; t < K; ++t) vc[j][t] = -v[static_cast<std::size_t>(c0 + j) * K + t];
+      }
+      // Rows above the group: every column of the group, one load of V's row for all of them.
+      const T* vr = v;
+      const T* const vend = v + static_cast<std::size_t>(c0) * K;
+      while (vr != vend) {  // <= kMaxState rows
+        T a[K];
+        for (int t = 0; t < K; ++t) a[t] = vr[t];
+        vr += K;
+        for (int j = 0; j < C; ++j) {
+          T* q = pc[j];
+          T s = *q;
+          for (int t = 0; t < K; ++t) s = fmadd(a[t], vc[j][t], s);
+          *q = s;
+          pc[j] = q + 1;
+        }
+      }
+      // The group's own triangle: rows c0 .. c0 + j of column c0 + j (pc[j] points at row c0).
+      for (int j = 0; j < C; ++j) {
+        for (int i = 0; i < j; ++i) {
+          T s = pc[j][i];
+          for (int t = 0; t < K; ++t) s = fmadd(v[static_cast<std::size_t>(c0 + i) * K + t], vc[j][t], s);
+          pc[j][i] = s;
+        }
+        downdate_variance(pc[j][j], vc[j], ws);
+      }
+    }
+    for (int c = c0; c < n; ++c) {  // < C columns left
       T vc[K];
-      for (int t = 0; t < K; ++t) vc[t] = v[static_cast<std::size_t>(c) * K + t];
+      for (int t = 0; t < K; ++t) vc[t] = -v[static_cast<std::size_t>(c) * K + t];
       T* pc = &p_[static_cast<std::size_t>(c) * (c + 1) / 2];
       for (int r = 0; r < c; ++r) {  // <= kMaxState rows above the diagonal
-        const T* vr = v + static_cast<std::size_t>(r) * K;
-        T s = vr[0] * vc[0];
-        for (int t = 1; t < K; ++t) s += vr[t] * vc[t];
-        pc[r] -= s;
+        T s = pc[r];
+        for (int t = 0; t < K; ++t) s = fmadd(v[static_cast<std::size_t>(r) * K + t], vc[t], s);
+        pc[r] = s;
       }
-      T s = vc[0] * vc[0];
-      for (int t = 1; t < K; ++t) s += vc[t] * vc[t];
-      const T floor = pc[c] * kMinVarianceRatio;
-      T nv = pc[c] - s;
-      if (!(nv >= floor)) {
-        nv = floor;
-        ++ws.floored_variances;
-      }
-      pc[c] = nv;
+      downdate_variance(pc[c], vc, ws);
     }
+  }
+  /// a * b + c rounded once: std::fma, which GCC lowers to VFMA.F32 on the M4F (checked in the
+  /// cross build's disassembly: no libcall) and the host's fmaf; both correctly rounded.
+  static T fmadd(T a, T b, T c) { return std::fma(a, b, c); }
+  /// The diagonal entry of a column whose -V row is nvc: the same fused chain, then the floor.
+  static void downdate_variance(T& pcc, const T (&nvc)[kUpdateBlockCols], SlamWorkspace<T, B>& ws) {
+    T nv = pcc;
+    for (int t = 0; t < kUpdateBlockCols; ++t) nv = fmadd(-nvc[t], nvc[t], nv);
+    const T floor = pcc * kMinVarianceRatio;
+    if (!(nv >= floor)) {
+      nv = floor;
+      ++ws.floored_variances;
+    }
+    pcc = nv;
   }
   T& P(int r, int c) { return p_[packed_index(r, c)]; }
   T P(int r, int c) const { return cov(r, c); }
