@@ -45,8 +45,8 @@ class IncrementalJoint {
   [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu, T& d2_out) {
     if (pairs_ >= MaxPairs) return Status::kCapacityExceeded;
     const int n = 2 * pairs_;  // rows held
-    T* row0 = &L_[static_cast<std::size_t>(n) * kRows];
-    T* row1 = row0 + kRows;
+    T* row0 = &L_[row_start(n)];
+    T* row1 = row0 + n + 1;  // row n holds n + 1 entries
     const int r0 = 2 * cand;
     if (check_reads_) {
       for (int p = 0; p < pairs_; ++p) {  // <= MaxPairs: the cross block of each held candidate
@@ -61,7 +61,7 @@ class IncrementalJoint {
     }
     // X = B L^-T, B = cross covariance of the new rows with the held ones (R has no cross terms).
     for (int c = 0; c < n; ++c) {  // <= 2 MaxPairs
-      const T* lc = &L_[static_cast<std::size_t>(c) * kRows];
+      const T* lc = &L_[row_start(c)];
       const int cc = 2 * cand_[c / 2] + (c % 2);
       T s0 = C(r0, cc);
       T s1 = C(r0 + 1, cc);
@@ -110,7 +110,13 @@ class IncrementalJoint {
   void pop() { --pairs_; }
 
  private:
-  std::array<T, static_cast<std::size_t>(kRows) * kRows> L_{};  // row-major, lower triangle
+  /// Where row r of the packed lower triangle starts: rows 0 .. r - 1 hold 1 + 2 + ... + r entries.
+  static constexpr std::size_t row_start(int r) {
+    return static_cast<std::size_t>(r) * static_cast<std::size_t>(r + 1) / 2;
+  }
+
+  // L, lower triangle packed row by row (row r: entries 0 .. r). Issue 13: half the square it was.
+  std::array<T, static_cast<std::size_t>(kRows) * (kRows + 1) / 2> L_{};
   std::array<T, kRows> y_{};                                    // L^-1 nu_H
   std::array<T, MaxPairs + 1> d2_{};                            // d2_[p]: joint d2 of p pairings
   std::array<std::int16_t, MaxPairs> cand_{};
