@@ -43,7 +43,7 @@ class Oracle {
 
   LD individual_d2(int i, int j) const {
     Eigen::Matrix<LD, 2, 2> S =
-        pred_.C.template block<2, 2>(2 * j, 2 * j).template cast<LD>() + obs_.R[i].template cast<LD>();
+        pred_.C.block(j, j).template cast<LD>() + obs_.R[i].template cast<LD>();
     Eigen::Matrix<LD, 2, 1> nu = nu_of(i, j);
     return nu.dot(S.ldlt().solve(nu));
   }
@@ -58,7 +58,7 @@ class Oracle {
       nu.template segment<2>(2 * a) = nu_of(pairs[a].first, pairs[a].second);
       for (int b = 0; b < n; ++b) {
         S.template block<2, 2>(2 * a, 2 * b) =
-            pred_.C.template block<2, 2>(2 * pairs[a].second, 2 * pairs[b].second).template cast<LD>();
+            pred_.C.block(pairs[a].second, pairs[b].second).template cast<LD>();
       }
       S.template block<2, 2>(2 * a, 2 * a) += obs_.R[pairs[a].first].template cast<LD>();
     }

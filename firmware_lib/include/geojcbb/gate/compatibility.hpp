@@ -45,7 +45,7 @@ struct CompatibilityTable {
 /// d2 of observation i and candidate j (the individual test's statistic).
 template <typename T, class B>
 T individual_d2(const Observations<T, B>& obs, const Prediction<T, B>& pred, int i, int j) {
-  const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
+  const Mat2<T> S = pred.C.block(j, j) + obs.R[i];
   return mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
 }
 
@@ -87,7 +87,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
       const T s_rr = pred.C(2 * j, 2 * j) + R(0, 0);
       const T s_bb = pred.C(2 * j + 1, 2 * j + 1) + R(1, 1);
       if (nu.x() * nu.x() > bound * s_rr || nu.y() * nu.y() > bound * s_bb) continue;
-      const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + R;
+      const Mat2<T> S = pred.C.block(j, j) + R;
       const T d2 = mahalanobis2(nu, S);
       if (!(d2 <= gate)) continue;
       int k = n++;                                     // insertion sort by d2, ties by candidate index (stable)

@@ -5,8 +5,9 @@
 // Since C_H is PSD and R_i is PD, every new pivot is at least lambda_min(R_i) in exact arithmetic;
 // a non-positive pivot therefore means C is not PSD, and is reported as kNotPositiveDefinite.
 // Issue 13: try_push reads C's cross blocks between the new candidate and the held ones, and (unless
-// told the caller checked all of C) checks each entry it reads against its mirror image (finite,
-// symmetric): C is validated where the joint test reads it.
+// told the caller checked all of C) checks each entry it reads is finite: C is validated where the
+// joint test reads it. C is symmetric by storage (BlockCovariance keeps one copy of a cross block; a
+// dense C's asymmetry is refused where it comes in, BlockCovariance::assign_dense).
 #pragma once
 
 #include <array>
@@ -33,14 +34,15 @@ class IncrementalJoint {
   T d2() const { return d2_[pairs_]; }
 
   /// Computes the joint d2 of the held hypothesis plus one pairing, without keeping it.
-  /// @param C     predicted-measurement covariance (2n x 2n; candidate j at rows 2j, 2j+1)
+  /// @param C     predicted-measurement covariance (2n x 2n, symmetric: C(r, c) is C(c, r); candidate j
+  ///              at rows 2j, 2j+1), e.g. a Prediction's BlockCovariance
   /// @param cand  candidate index of the new pairing
   /// @param R     the observation's noise
   /// @param nu    the pair's innovation z_i - h_j (bearing wrapped)
   /// @param[out] d2_out  joint d2 with the new pairing
-  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNonFinite / kNotSymmetric for a cross
-  ///         entry of C read here that is not finite or differs from its mirror image (when checking
-  ///         reads); kNotPositiveDefinite for a pivot <= 0. Nothing held changes unless kOk.
+  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNonFinite for a cross entry of C read
+  ///         here that is not finite (when checking reads); kNotPositiveDefinite for a pivot <= 0.
+  ///         Nothing held changes unless kOk.
   template <class CMatrix>
   [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu, T& d2_out) {
     if (pairs_ >= MaxPairs) return Status::kCapacityExceeded;
@@ -53,8 +55,7 @@ class IncrementalJoint {
         const int c0 = 2 * cand_[p];
         for (int a = 0; a < 2; ++a) {
           for (int b = 0; b < 2; ++b) {
-            const Status s = check_mirrored(C(r0 + a, c0 + b), C(c0 + b, r0 + a));
-            if (s != Status::kOk) return s;
+            if (!std::isfinite(C(r0 + a, c0 + b))) return Status::kNonFinite;
           }
         }
       }
