@@ -33,12 +33,15 @@ bool in_local_region(const AssociationConfig<T, B>& cfg, const Vec2<T>& h) {
   return !cfg.local_region || h.x() < cfg.local_radius_m;
 }
 
-template <typename T, class B>
+/// @tparam PerObservation  candidates held per observation: all of them for the gate's table; the
+///                         merge's repair search holds one (issue 13: 4.4 KB less on the M4F).
+template <typename T, class B, int PerObservation = B::kMaxCandidates>
 struct CompatibilityTable {
+  static constexpr int kPerObservation = PerObservation;
   std::array<std::int16_t, B::kMaxObservations> count;  ///< compatible candidates per observation
   /// cand[i][k]: k-th nearest compatible candidate of observation i (k < count[i]).
-  std::array<std::array<std::int16_t, B::kMaxCandidates>, B::kMaxObservations> cand;
-  std::array<std::array<T, B::kMaxCandidates>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
+  std::array<std::array<std::int16_t, PerObservation>, B::kMaxObservations> cand;
+  std::array<std::array<T, PerObservation>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
   std::array<bool, B::kMaxCandidates> in_region;
 };
 
