@@ -47,7 +47,8 @@ extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int
   Status s = make_strategy(static_cast<Strategy>(strategy), params_of(*p), cfg);
   if (s != Status::kOk) return static_cast<int>(s);
   load(m, z, R);
-  s = g_pred.C.assign_dense(Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(C, 2 * n, 2 * n));
+  s = g_pred.C.assign_dense(
+      Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(C, 2 * n, 2 * n));
   if (s != Status::kOk) return static_cast<int>(s);
   g_pred.count = n;
   for (int j = 0; j < n; ++j) {

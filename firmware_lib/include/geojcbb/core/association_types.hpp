@@ -76,7 +76,7 @@ class BlockCovariance {
   /// n candidates (clamped to [0, MaxCandidates]), C = s I. Bound: the blocks of n candidates.
   void set_identity(int n, T s = T(1)) {
     n_ = n < 0 ? 0 : (n > MaxCandidates ? MaxCandidates : n);
-    for (int k = 0; k < n_ * (n_ + 1) / 2; ++k) blocks_[k] = Mat2<T>::Zero();  // <= kMaxBlocks
+    for (int k = 0; k < n_ * (n_ + 1) / 2; ++k) blocks_[k] = Mat2<T>::Zero();     // <= kMaxBlocks
     for (int a = 0; a < n_; ++a) blocks_[index(a, a)] = Mat2<T>::Identity() * s;  // <= MaxCandidates
   }
 
@@ -113,16 +113,16 @@ class BlockCovariance {
     if (rows != static_cast<int>(C.cols()) || rows % 2 != 0) return Status::kInvalidInput;
     const int n = rows / 2;
     if (n > MaxCandidates) return Status::kCapacityExceeded;
-    for (int r = 0; r < rows; ++r) {                 // <= 2 MaxCandidates
-      for (int c = 0; c < 2 * (r / 2); ++c) {        // <= 2 MaxCandidates: the cross blocks left of r's
+    for (int r = 0; r < rows; ++r) {           // <= 2 MaxCandidates
+      for (int c = 0; c < 2 * (r / 2); ++c) {  // <= 2 MaxCandidates: the cross blocks left of r's
         const T x = static_cast<T>(C(r, c));
         const T y = static_cast<T>(C(c, r));
         if (std::isfinite(x) && std::isfinite(y) && !nearly_equal(x, y)) return Status::kNotSymmetric;
       }
     }
     n_ = n;
-    for (int a = 0; a < n; ++a) {      // <= MaxCandidates
-      for (int b = 0; b <= a; ++b) {   // <= MaxCandidates
+    for (int a = 0; a < n; ++a) {     // <= MaxCandidates
+      for (int b = 0; b <= a; ++b) {  // <= MaxCandidates
         Mat2<T>& m = blocks_[index(a, b)];
         for (int r = 0; r < 2; ++r) {
           for (int c = 0; c < 2; ++c) {

@@ -118,8 +118,8 @@ class IncrementalJoint {
 
   // L, lower triangle packed row by row (row r: entries 0 .. r). Issue 13: half the square it was.
   std::array<T, static_cast<std::size_t>(kRows) * (kRows + 1) / 2> L_{};
-  std::array<T, kRows> y_{};                                    // L^-1 nu_H
-  std::array<T, MaxPairs + 1> d2_{};                            // d2_[p]: joint d2 of p pairings
+  std::array<T, kRows> y_{};          // L^-1 nu_H
+  std::array<T, MaxPairs + 1> d2_{};  // d2_[p]: joint d2 of p pairings
   std::array<std::int16_t, MaxPairs> cand_{};
   int pairs_ = 0;
   bool check_reads_ = true;
