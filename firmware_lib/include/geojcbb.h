@@ -1,5 +1,5 @@
 /* geojcbb C API (C99): the float association pipeline and the EKF-SLAM step at the default bounds
- * (24 observations per scan, 32 candidates, 5 groups, 4000 JCBB nodes, 48 landmarks), for C
+ * (24 observations per scan, 32 candidates, 5 groups, 4000 JCBB nodes, 96 landmarks), for C
  * firmware. Inputs and outputs are plain arrays and structs; all working memory is a buffer the
  * caller provides (typically static) of GEOJCBB_*_STORAGE_SIZE bytes aligned to
  * GEOJCBB_STORAGE_ALIGN. No heap, no exceptions escape, nothing is printed. Every call returns a
@@ -20,7 +20,7 @@ extern "C" {
 #define GEOJCBB_MAX_CANDIDATES 32
 #define GEOJCBB_MAX_GROUPS 5
 #define GEOJCBB_MAX_JCBB_NODES 4000
-#define GEOJCBB_MAX_LANDMARKS 48
+#define GEOJCBB_MAX_LANDMARKS 96
 
 /* Per-observation answers besides a feature id (>= 0). */
 #define GEOJCBB_NEW_FEATURE (-1) /* nothing compatible: a new landmark (or clutter) */
@@ -31,8 +31,8 @@ extern "C" {
  * the buffer given is large and aligned enough. Declare storage as, for example:
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
-#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 45296
-#define GEOJCBB_SLAM_STORAGE_SIZE 72192
+#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28384
+#define GEOJCBB_SLAM_STORAGE_SIZE 115520
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */

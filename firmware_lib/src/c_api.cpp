@@ -133,6 +133,17 @@ Status load_observations(int m, const float* z, const float* R, ObservationsF& o
   return Status::kOk;
 }
 
+/// The caller's row-major dense C (dim x dim floats), as BlockCovariance::assign_dense reads it.
+struct RowMajorView {
+  const float* C;
+  int dim;
+  int rows() const { return dim; }
+  int cols() const { return dim; }
+  float operator()(int r, int c) const {
+    return C[static_cast<std::size_t>(r) * static_cast<std::size_t>(dim) + static_cast<std::size_t>(c)];
+  }
+};
+
 }  // namespace
 
 extern "C" {
@@ -181,15 +192,15 @@ geojcbb_status geojcbb_associate(geojcbb_associator* handle, int m, const float*
   Status s = load_observations(m, z, R, a->obs);
   if (s != Status::kOk) return c_status(s);
   PredictionF& p = a->pred;
+  // The caller's C is dense (row-major 2n x 2n); the prediction holds its lower block triangle, so an
+  // asymmetric cross block is rejected here (GEOJCBB_NOT_SYMMETRIC) rather than where it is read.
+  s = p.C.assign_dense(RowMajorView{C, 2 * n});
+  if (s != Status::kOk) return c_status(s);
   p.count = n;
-  p.C.resize(2 * n, 2 * n);
   for (int j = 0; j < n; ++j) {  // <= kMaxCandidates
     p.id[j] = ids[j];
     p.h[j] = Vec2<float>(h[2 * j], h[2 * j + 1]);
   }
-  for (int r = 0; r < 2 * n; ++r)    // <= 2 kMaxCandidates
-    for (int c = 0; c < 2 * n; ++c)  // <= 2 kMaxCandidates
-      p.C(r, c) = C[static_cast<std::size_t>(r) * static_cast<std::size_t>(2 * n) + static_cast<std::size_t>(c)];
   s = associate_f32(a->obs, p, a->cfg, a->ws, a->out);
   if (s != Status::kOk) return c_status(s);
   const AssociationF& o = a->out;

@@ -142,7 +142,7 @@ static void oracle_associate(SlamSession::State& s, const std::vector<SimObserva
     int best_hits = -1;
     const Prediction<double, EB>& pred = s.step.prediction();
     for (int a = 0; a < pred.count; ++a) {
-      const Eigen::Matrix2d S = pred.C.block<2, 2>(2 * a, 2 * a) + s.obs.R[i];
+      const Eigen::Matrix2d S = pred.C.block(a, a) + s.obs.R[i];
       const Eigen::Vector2d nu = innovation(s.obs.z[i], pred.h[a]);
       const double d2 = nu.dot(S.ldlt().solve(nu));
       nearest = std::min(nearest, d2);

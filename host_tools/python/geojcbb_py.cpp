@@ -183,7 +183,10 @@ py::dict associate_py(const Arr& z, const Arr& R, const Arr& h, const Arr& C,
     p.id[j] = static_cast<FeatureId>(ip[j]);
     p.h[j] = Vec2<T>(hp[2 * j], hp[2 * j + 1]);
   }
-  p.C = Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(C.data(), 2 * n, 2 * n);
+  // Dense in, lower block triangle kept: an asymmetric cross block is rejected here (kNotSymmetric).
+  check(p.C.assign_dense(Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            C.data(), 2 * n, 2 * n)),
+        "associate");
   check(associate(st->obs, p, cfg, st->ws, st->out), "associate");
   const Association<T, PyBounds>& o = st->out;
   py::array_t<std::int32_t> feature(o.count);

@@ -47,14 +47,14 @@ extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int
   Status s = make_strategy(static_cast<Strategy>(strategy), params_of(*p), cfg);
   if (s != Status::kOk) return static_cast<int>(s);
   load(m, z, R);
+  s = g_pred.C.assign_dense(
+      Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(C, 2 * n, 2 * n));
+  if (s != Status::kOk) return static_cast<int>(s);
   g_pred.count = n;
-  g_pred.C.resize(2 * n, 2 * n);
   for (int j = 0; j < n; ++j) {
     g_pred.id[j] = ids[j];
     g_pred.h[j] = Vec2<float>(h[2 * j], h[2 * j + 1]);
   }
-  for (int r = 0; r < 2 * n; ++r)
-    for (int c = 0; c < 2 * n; ++c) g_pred.C(r, c) = C[r * 2 * n + c];
   s = associate_f32(g_obs, g_pred, cfg, g_ws, g_out);
   if (s != Status::kOk) return static_cast<int>(s);
   for (int i = 0; i < m; ++i) {

@@ -166,7 +166,7 @@ void run(Input& in) {
   s.slam = ekf::Slam<T, B>{};
   s.obs.clear();
   s.pred.count = 0;
-  s.pred.C.resize(0, 0);
+  require(s.pred.C.resize(0) == Status::kOk);
   s.assoc = Association<T, B>{};
   bool filter_ready = false;
 
@@ -255,7 +255,6 @@ void run(Input& in) {
         mutates = false;
         const int n = in.u8() % (B::kMaxCandidates + 1);
         s.pred.count = n;
-        s.pred.C.resize(2 * n, 2 * n);
         for (int j = 0; j < n; ++j) {                                            // <= kMaxCandidates
           s.pred.id[j] = (op & 0x10) ? static_cast<FeatureId>(in.u8() % 4) : j;  // duplicates on request
           const T range = in.f(T(0.5) + T(in.u8()) / T(25));
@@ -266,12 +265,18 @@ void run(Input& in) {
                                                                                                             2 * n);
         for (int r = 0; r < 2 * n; ++r)
           for (int c = 0; c < 2 * n; ++c) J(r, c) = (r == c) ? T(0.1) : T(static_cast<int>(in.u8()) - 128) / T(2000);
-        s.pred.C = J * J.transpose();
+        Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * B::kMaxCandidates, 2 * B::kMaxCandidates> D =
+            J * J.transpose();
         if (op & 0x20 && n > 0) {
           const int r = in.u8() % (2 * n), c = in.u8() % (2 * n);
-          s.pred.C(r, c) = in.f(s.pred.C(r, c));
-          if (op & 0x40) s.pred.C(c, r) = s.pred.C(r, c);
+          D(r, c) = in.f(D(r, c));
+          if (op & 0x40) D(c, r) = D(r, c);
         }
+        // The dense boundary (issue 13: C is packed): an asymmetric cross entry is refused there, and
+        // the prediction's C is left as it was.
+        const Snapshot<JointCovariance<T, B>> cb(s.pred.C);
+        const Status cs = s.pred.C.assign_dense(D);
+        require(cs == Status::kOk || (cs == Status::kNotSymmetric && cb.same(s.pred.C)));
         if (op & 0x80) s.pred.count = static_cast<int>(in.u8() % 12) - 2;  // out of range on purpose
         break;
       }

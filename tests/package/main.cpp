@@ -15,7 +15,7 @@ int main() {
   pred.count = 1;
   pred.id[0] = 7;
   pred.h[0] = Vec2<float>(5.05f, 0.1f);
-  pred.C = Mat2<float>::Identity() * 0.02f;
+  pred.C.set_identity(1, 0.02f);
   if (associate(obs, pred, cfg, ws, out) != Status::kOk) return 1;
   return out.feature[0] == 7 ? 0 : 1;
 }

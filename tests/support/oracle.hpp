@@ -42,8 +42,7 @@ class Oracle {
   bool saw_borderline() const { return borderline_; }
 
   LD individual_d2(int i, int j) const {
-    Eigen::Matrix<LD, 2, 2> S =
-        pred_.C.template block<2, 2>(2 * j, 2 * j).template cast<LD>() + obs_.R[i].template cast<LD>();
+    Eigen::Matrix<LD, 2, 2> S = pred_.C.block(j, j).template cast<LD>() + obs_.R[i].template cast<LD>();
     Eigen::Matrix<LD, 2, 1> nu = nu_of(i, j);
     return nu.dot(S.ldlt().solve(nu));
   }
@@ -57,8 +56,7 @@ class Oracle {
     for (int a = 0; a < n; ++a) {
       nu.template segment<2>(2 * a) = nu_of(pairs[a].first, pairs[a].second);
       for (int b = 0; b < n; ++b) {
-        S.template block<2, 2>(2 * a, 2 * b) =
-            pred_.C.template block<2, 2>(2 * pairs[a].second, 2 * pairs[b].second).template cast<LD>();
+        S.template block<2, 2>(2 * a, 2 * b) = pred_.C.block(pairs[a].second, pairs[b].second).template cast<LD>();
       }
       S.template block<2, 2>(2 * a, 2 * a) += obs_.R[pairs[a].first].template cast<LD>();
     }

@@ -290,7 +290,7 @@ template <typename T, class B>
     if (c >= 0) {
       ++pairings;
       out.feature[i] = pred.id[c];
-      const Mat2<T> S = pred.C.template block<2, 2>(2 * c, 2 * c) + obs.R[i];
+      const Mat2<T> S = pred.C.block(c, c) + obs.R[i];
       out.d2[i] = mahalanobis2(innovation(obs.z[i], pred.h[c]), S);
     } else {
       bool free_compatible = false;                                    // a compatible candidate that no pairing holds

@@ -45,10 +45,10 @@ bool read_scene(std::istream& in, State& s, AssociationConfig<double, PyBounds>&
   s.pred.count = n;
   for (int j = 0; j < n; ++j) in >> s.pred.id[j];
   for (int j = 0; j < n; ++j) in >> s.pred.h[j].x() >> s.pred.h[j].y();
-  s.pred.C.resize(2 * n, 2 * n);
+  Eigen::MatrixXd C(2 * n, 2 * n);  // dense in the file; the prediction holds its lower blocks
   for (int r = 0; r < 2 * n; ++r)
-    for (int c = 0; c < 2 * n; ++c) in >> s.pred.C(r, c);
-  return static_cast<bool>(in);
+    for (int c = 0; c < 2 * n; ++c) in >> C(r, c);
+  return static_cast<bool>(in) && s.pred.C.assign_dense(C) == Status::kOk;
 }
 }  // namespace
 

@@ -89,6 +89,8 @@ def test_every_bad_input_raises_its_status():
     assert status_of(assoc(R=badR)) == "kNotPositiveDefinite"
     badC = C.copy(); badC[0, 1] += 0.5
     assert status_of(assoc(C=badC)) == "kNotSymmetric"
+    badC = C.copy(); badC[0, 2] += 0.5  # a cross block: refused as the dense C is packed
+    assert status_of(assoc(C=badC)) == "kNotSymmetric"
     badC = C.copy(); badC[0, 0] = -1.0
     assert status_of(assoc(C=badC)) == "kNotPositiveDefinite"
     assert status_of(assoc(ids=-ids)) == "kInvalidInput"

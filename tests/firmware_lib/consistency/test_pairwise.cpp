@@ -176,7 +176,7 @@ TEST_CASE_TEMPLATE("consistency: graph nodes from the wide gate, capped at MaxNo
       for (int i = 0; i < in->obs.count; ++i) {
         for (int a = 0; a < in->pred.count; ++a) {
           if (!opt.in_region(in->pred.h[a])) continue;
-          const Mat2<T> S = in->pred.C.template block<2, 2>(2 * a, 2 * a) + in->obs.R[i];
+          const Mat2<T> S = in->pred.C.block(a, a) + in->obs.R[i];
           const T d2 = mahalanobis2(innovation(in->obs.z[i], in->pred.h[a]), S);
           if (gate == PairingGate::kWide && !(d2 <= opt.wide_d2)) continue;
           all.emplace_back(d2, i, a);

@@ -14,12 +14,12 @@ void one_obs(Problem<T, B>& p, Vec2<T> z, std::initializer_list<Vec2<T>> hs) {
   p.obs.z[0] = z;
   p.obs.R[0] = Mat2<T>::Identity() * T(0.01);
   p.pred.count = static_cast<int>(hs.size());
-  p.pred.C.setZero(2 * p.pred.count, 2 * p.pred.count);
+  p.pred.C.set_identity(p.pred.count, T(0));
   int j = 0;
   for (const auto& h : hs) {
     p.pred.id[j] = 100 + j;
     p.pred.h[j] = h;
-    p.pred.C.template block<2, 2>(2 * j, 2 * j) = Mat2<T>::Identity() * T(0.01);
+    p.pred.C.set_block(j, j, Mat2<T>::Identity() * T(0.01));
     ++j;
   }
 }
@@ -79,7 +79,7 @@ TEST_CASE_TEMPLATE("new vs unmatched: no compatible candidate is new - compatibl
   p->pred.count = 1;
   p->pred.id[0] = 7;
   p->pred.h[0] = Vec2<T>(T(5), T(0));
-  p->pred.C = Mat2<T>::Identity() * T(0.01);
+  p->pred.C.set_identity(1, T(0.01));
   auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, true, true);
   REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
   CHECK(p->out.feature[0] == 7);
@@ -102,7 +102,7 @@ TEST_CASE_TEMPLATE("new if candidates taken: an observation whose only compatibl
   p->pred.h[0] = Vec2<T>(T(5), T(0));
   p->pred.id[1] = 8;
   p->pred.h[1] = Vec2<T>(T(9), T(1));  // far from everything
-  p->pred.C = JointCovariance<T, DefaultBounds>::Identity(4, 4) * T(0.01);
+  p->pred.C.set_identity(2, T(0.01));
   auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, true, true);
   cfg.new_if_candidates_taken = true;
   REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
@@ -129,7 +129,7 @@ TEST_CASE_TEMPLATE("decline: an observation between two features is left unmatch
     p->obs.z[1] = Vec2<T>(T(3), T(-0.6));
     for (int i = 0; i < 2; ++i) p->obs.R[i] = Mat2<T>::Identity() * T(1e-5);
     p->pred.count = 3;
-    p->pred.C = JointCovariance<T, DefaultBounds>::Identity(6, 6) * T(1e-5);  // S: 0.0045 rad
+    p->pred.C.set_identity(3, T(1e-5));  // S: 0.0045 rad
     const Vec2<T> h[3] = {Vec2<T>(T(5), T(0)), Vec2<T>(T(5), T(0.02)), Vec2<T>(T(3), T(-0.6))};
     for (int j = 0; j < 3; ++j) {
       p->pred.id[j] = 100 + j;

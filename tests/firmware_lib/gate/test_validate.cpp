@@ -10,6 +10,29 @@
 using namespace geojcbb;
 using namespace geojcbb::test;
 
+namespace {
+/// The packed C as a dense matrix (every entry through the accessor).
+template <typename T, class B>
+Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> dense_of(const JointCovariance<T, B>& C) {
+  Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> D(C.rows(), C.cols());
+  for (int r = 0; r < C.rows(); ++r)
+    for (int c = 0; c < C.cols(); ++c) D(r, c) = C(r, c);
+  return D;
+}
+/// Same candidates and every entry bit for bit (the blocks past the count are not C's).
+template <typename T, class B>
+bool same_C(const JointCovariance<T, B>& x, const JointCovariance<T, B>& y) {
+  if (x.rows() != y.rows()) return false;
+  for (int r = 0; r < x.rows(); ++r) {
+    for (int c = 0; c < x.cols(); ++c) {
+      const T a = x(r, c), b = y(r, c);
+      if (std::memcmp(&a, &b, sizeof(T)) != 0) return false;
+    }
+  }
+  return true;
+}
+}  // namespace
+
 TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untouched", T, float, double) {
   using B = DefaultBounds;
   host::SceneParams sp;
@@ -42,11 +65,13 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"R not positive definite", Status::kNotPositiveDefinite,
        [&](auto& p, auto&) { p.obs.R[4] << T(0.01), T(0.02), T(0.02), T(0.01); }},
       {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
-      // Candidates 2 and 0: no joint test of this scene holds both, so only the full check reads it.
-      {"C not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 0) += T(0.5); }, true},
+      // A cross block cannot be asymmetric in the packed C (issue 13): that is checked where a dense C
+      // comes in (the test "a dense C's asymmetric cross block is refused where it comes in" below).
+      // A diagonal block is stored whole and is still validate()'s to check, in both modes.
+      {"C diagonal block not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 4) += T(0.5); }},
       {"C block indefinite", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
       {"C wrong size", Status::kInvalidInput,
-       [&](auto& p, auto&) { p.pred.C.conservativeResize(2 * p.pred.count - 2, 2 * p.pred.count - 2); }},
+       [&](auto& p, auto&) { CHECK(p.pred.C.resize(p.pred.count - 1) == Status::kOk); }},
       {"observations over capacity", Status::kCapacityExceeded,
        [&](auto& p, auto&) { p.obs.count = B::kMaxObservations + 1; }},
       {"candidates over capacity", Status::kCapacityExceeded,
@@ -103,8 +128,8 @@ TEST_CASE_TEMPLATE("an indefinite C found in the joint test is reported, output 
   p->pred.id[1] = 1;
   p->pred.h[0] = p->obs.z[0];
   p->pred.h[1] = p->obs.z[1];
-  p->pred.C = decltype(p->pred.C)::Identity(4, 4);
-  p->pred.C(2, 0) = p->pred.C(0, 2) = T(3);  // |correlation| > 1
+  p->pred.C.set_identity(2);
+  p->pred.C(2, 0) = T(3);  // and C(0, 2): |correlation| > 1
   auto cfg = make_config<T, B>(SearchMethod::kJcbb, false, false);
   std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
   Association<T, B> before;
@@ -116,7 +141,7 @@ TEST_CASE_TEMPLATE("an indefinite C found in the joint test is reported, output 
 TEST_CASE_TEMPLATE("empty input is not an error: an empty answer", T, float, double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();
-  p->pred.C.resize(0, 0);
+  REQUIRE(p->pred.C.resize(0) == Status::kOk);
   for (auto search : {SearchMethod::kIcnn, SearchMethod::kJcbb}) {
     auto cfg = make_config<T, B>(search, true, true);
     REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
@@ -141,7 +166,7 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   p->obs.R[0] = Mat2<T>::Identity() * T(0.01);
   p->pred.count = 3;
   const T ranges[] = {T(4), T(6), T(30)};  // the last is outside r + d = 10 m
-  p->pred.C = decltype(p->pred.C)::Identity(6, 6) * T(0.01);
+  p->pred.C.set_identity(3, T(0.01));
   for (int j = 0; j < 3; ++j) {
     p->pred.id[j] = j;
     p->pred.h[j] = Vec2<T>(ranges[j], T(0));
@@ -185,6 +210,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
   const T inf = std::numeric_limits<T>::infinity();
   int read_cases = 0;
   int unread_cases = 0;
+  int refused_cases = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     host::SceneParams sp;
     sp.observations = 8;
@@ -214,7 +240,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
       for (int j = 0; j < base->pred.count && unread < 0; ++j) {
         bool near = false;
         for (int i = 0; i < base->obs.count; ++i) {
-          const Mat2<T> S = base->pred.C.template block<2, 2>(2 * j, 2 * j) + base->obs.R[i];
+          const Mat2<T> S = base->pred.C.block(j, j) + base->obs.R[i];
           near = near || mahalanobis2(innovation(base->obs.z[i], base->pred.h[j]), S) <= cfg.consistency.wide_d2;
         }
         if (!near) unread = j;
@@ -224,8 +250,12 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
         bool mirror_only;  // corrupt one side only (asymmetry) or both (NaN / Inf on both sides)
         Status want;
       };
+      // A one-sided change goes in through a dense C (BlockCovariance::assign_dense): a non-finite side
+      // is kept for the stages to find; an asymmetry cannot be held by the packed C and is refused
+      // there, whether or not a test would read it, with the prediction unchanged.
       const Bad bads[] = {
           {nan, false, Status::kNonFinite}, {inf, true, Status::kNonFinite}, {T(0.37), true, Status::kNotSymmetric}};
+      const auto dense = dense_of<T, B>(base->pred.C);
       for (const Bad& bad : bads) {
         for (int which = 0; which < 2; ++which) {
           const int a = which == 0 ? c1 : unread;
@@ -234,8 +264,17 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
           for (int entry = 0; entry < 4; ++entry) {
             auto p = std::make_unique<Problem<T, B>>(*base);
             const int r = 2 * a + entry / 2, c = 2 * b + entry % 2;
-            p->pred.C(r, c) = bad.mirror_only ? p->pred.C(r, c) + bad.value : bad.value;
-            if (!bad.mirror_only) p->pred.C(c, r) = bad.value;
+            auto D = dense;
+            D(r, c) = bad.mirror_only ? D(r, c) + bad.value : bad.value;
+            if (!bad.mirror_only) D(c, r) = bad.value;
+            const Status loaded = p->pred.C.assign_dense(D);
+            if (bad.want == Status::kNotSymmetric) {
+              ++refused_cases;
+              CHECK(loaded == Status::kNotSymmetric);
+              CHECK(same_C<T, B>(p->pred.C, base->pred.C));
+              continue;
+            }
+            REQUIRE(loaded == Status::kOk);
             std::memset(static_cast<void*>(&p->out), 0x5A, sizeof(p->out));
             Association<T, B> before;
             std::memcpy(static_cast<void*>(&before), &p->out, sizeof(before));
@@ -262,6 +301,48 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
   }
   CHECK(read_cases > 100);
   CHECK(unread_cases > 100);
+  CHECK(refused_cases > 100);
+}
+
+// Issue 13: the prediction holds C's lower block triangle, so an asymmetric cross block can only come
+// in through a dense C (the C API, the Python binding, BlockCovariance::assign_dense). It is refused
+// there with kNotSymmetric (within validate()'s tolerance it is accepted, the lower entry kept), and
+// the prediction is left as it was; a non-finite entry on either side is kept for the stages.
+TEST_CASE_TEMPLATE("a dense C's asymmetric cross block is refused where it comes in", T, float, double) {
+  using B = DefaultBounds;
+  host::SceneParams sp;
+  sp.observations = 6;
+  sp.landmarks = 8;
+  const host::Scene scene = host::make_scene(sp, 1234);
+  auto base = make_problem<T, B>();
+  REQUIRE(host::to_inputs(scene, base->obs, base->pred));
+  const auto dense = dense_of<T, B>(base->pred.C);
+  REQUIRE(dense.rows() == 2 * base->pred.count);
+  CHECK((dense - dense.transpose()).cwiseAbs().maxCoeff() == T(0));
+  auto p = std::make_unique<Problem<T, B>>(*base);
+  auto D = dense;
+  D(5, 0) += T(0.5);  // cross block of candidates 2 and 0
+  CHECK(p->pred.C.assign_dense(D) == Status::kNotSymmetric);
+  CHECK(same_C<T, B>(p->pred.C, base->pred.C));
+  D = dense;
+  D(0, 5) *= T(1) + T(2) * std::numeric_limits<T>::epsilon();  // within rounding: accepted, lower kept
+  REQUIRE(p->pred.C.assign_dense(D) == Status::kOk);
+  CHECK(p->pred.C(0, 5) == dense(5, 0));
+  CHECK(same_C<T, B>(p->pred.C, base->pred.C));
+  D = dense;
+  D(0, 5) = std::numeric_limits<T>::quiet_NaN();  // upper side non-finite: kept, found where read
+  REQUIRE(p->pred.C.assign_dense(D) == Status::kOk);
+  CHECK(std::isnan(p->pred.C(5, 0)));
+  D = dense;
+  D(4, 5) += T(0.5);  // inside candidate 2's diagonal block: stored whole, validate()'s to refuse
+  REQUIRE(p->pred.C.assign_dense(D) == Status::kOk);
+  CHECK(p->pred.C(4, 5) != p->pred.C(5, 4));
+  auto cfg = make_config<T, B>(SearchMethod::kJcbb, true, true);
+  CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNotSymmetric);
+  D.resize(2 * base->pred.count, 2 * base->pred.count - 1);  // not square
+  CHECK(p->pred.C.assign_dense(D) == Status::kInvalidInput);
+  D.resize(2 * B::kMaxCandidates + 2, 2 * B::kMaxCandidates + 2);
+  CHECK(p->pred.C.assign_dense(D) == Status::kCapacityExceeded);
 }
 
 TEST_CASE_TEMPLATE("the full covariance check and the check where read give the same answers", T, float, double) {

@@ -76,7 +76,8 @@ TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation - off,
   p->pred.count = 1;
   p->pred.id[0] = 42;
   p->pred.h[0] = Vec2<T>(T(5), T(0));
-  p->pred.C = Mat2<T>(Vec2<T>(T(0.01), T(0.0003)).asDiagonal());
+  REQUIRE(p->pred.C.resize(1) == Status::kOk);
+  p->pred.C.set_block(0, 0, Mat2<T>(Vec2<T>(T(0.01), T(0.0003)).asDiagonal()));
   for (auto search : {SearchMethod::kJcbb, SearchMethod::kIcnn}) {
     CAPTURE(static_cast<int>(search));
     auto off = make_config<T, B>(search, false, false);

@@ -131,7 +131,7 @@ T least_position_variance(const ConsistencyWorkspace<T, B, MaxNodes>& ws, const 
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     if (!opt.in_region(pred.h[a])) continue;
     const Mat2<T>& J = ws.geometry.cand_J[a];
-    const Mat2<T> S = J * pred.C.template block<2, 2>(2 * a, 2 * a) * J.transpose();
+    const Mat2<T> S = J * pred.C.block(a, a) * J.transpose();
     const T v = S(0, 0) + S(1, 1);
     if (v < least) least = v;
   }

@@ -99,27 +99,22 @@ T norm_variance(const Vec2<T>& d, const Mat2<T>& S, T norm) {
 }  // namespace pairwise_detail
 
 /// The distance test of pairings (i, a) and (k, b), a != b. Inputs validated, geometry prepared.
-/// @return kOk; kNonFinite / kNotSymmetric for an entry of C's cross block (a, b) that is not finite
-///         or differs from its mirror image (C validated where it is read, issue 13);
+/// @return kOk; kNonFinite for an entry of C's cross block (a, b) that is not finite (C validated
+///         where it is read, issue 13; the packed C's cross blocks are symmetric by storage);
 ///         kNotPositiveDefinite when C's blocks of a and b make Sigma_v's variance negative beyond
 ///         rounding (C not PSD).
 template <typename T, class B>
 [[nodiscard]] Status pair_statistic(const PairwiseGeometry<T, B>& geo, const Prediction<T, B>& pred, int i, int a,
                                     int k, int b, PairStatistic<T>& out) {
-  for (int r = 0; r < 2; ++r) {
-    for (int c = 0; c < 2; ++c) {
-      const Status s = check_mirrored(pred.C(2 * a + r, 2 * b + c), pred.C(2 * b + c, 2 * a + r));
-      if (s != Status::kOk) return s;
-    }
-  }
+  if (!pred.C.block(a, b).allFinite()) return Status::kNonFinite;
   const Vec2<T> u = geo.obs_point[i] - geo.obs_point[k];
   const Mat2<T> Su = geo.obs_cov[i] + geo.obs_cov[k];
   const Vec2<T> v = geo.cand_point[a] - geo.cand_point[b];
   const Mat2<T>& Ja = geo.cand_J[a];
   const Mat2<T>& Jb = geo.cand_J[b];
-  const Mat2<T> Saa = Ja * pred.C.template block<2, 2>(2 * a, 2 * a) * Ja.transpose();
-  const Mat2<T> Sbb = Jb * pred.C.template block<2, 2>(2 * b, 2 * b) * Jb.transpose();
-  const Mat2<T> Sab = Ja * pred.C.template block<2, 2>(2 * a, 2 * b) * Jb.transpose();
+  const Mat2<T> Saa = Ja * pred.C.block(a, a) * Ja.transpose();
+  const Mat2<T> Sbb = Jb * pred.C.block(b, b) * Jb.transpose();
+  const Mat2<T> Sab = Ja * pred.C.block(a, b) * Jb.transpose();
   const Mat2<T> Sv = Saa + Sbb - Sab - Sab.transpose();
   PairStatistic<T> st;
   st.observed_m = u.norm();
@@ -151,7 +146,7 @@ void select_pairings(const Observations<T, B>& obs, const Prediction<T, B>& pred
   for (int i = 0; i < obs.count; ++i) {     // <= kMaxObservations
     for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       if (!opt.in_region(pred.h[a])) continue;
-      const Mat2<T> S = pred.C.template block<2, 2>(2 * a, 2 * a) + obs.R[i];
+      const Mat2<T> S = pred.C.block(a, a) + obs.R[i];
       Pairing<T> p;
       p.obs = static_cast<std::int8_t>(i);
       p.cand = static_cast<std::int16_t>(a);

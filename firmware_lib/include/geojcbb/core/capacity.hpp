@@ -34,11 +34,12 @@ struct Bounds {
 };
 
 /// Controller-class default: 24 observations per scan, 32 candidates in the local region, 5 groups,
-/// 4000 JCBB nodes per scan, 48 landmarks in the map. The float device loop at these bounds
-/// (node::Node, all memory static) needs about 110 KB of RAM and fits, with a 4 KiB stack, in
-/// 128 KiB; at 64 landmarks it needed 150 KB (the covariance alone grows as (3 + 2n)^2 floats).
-/// See docs/firmware.md.
-using DefaultBounds = Bounds<24, 32, 5, 4000, 48>;
+/// 4000 JCBB nodes per scan, 96 landmarks in the map. The float device loop at these bounds
+/// (node::Node, all memory static) needs about 119 KB of RAM and fits, with a 4 KiB stack, in
+/// 128 KiB (issue 13: packed covariance P, packed C in the Prediction, O(n) update scratch; the
+/// covariance still grows as (3 + 2N)(4 + 2N)/2 floats, and at most 100 landmarks fit).
+/// See docs/firmware.md, "Configurations".
+using DefaultBounds = Bounds<24, 32, 5, 4000, 96>;
 
 /// The Cortex-M4F firmware's other configurations (firmware_lib/port/mps2_an386, docs/firmware.md):
 /// a smaller part, and a large one with the desktop device's capacity (a whole env1 lap fits).

@@ -56,15 +56,6 @@ bool nearly_equal(T a, T b) {
   return std::abs(a - b) <= kCovarianceTolerance<T> * (std::abs(a) + std::abs(b)) + std::numeric_limits<T>::min();
 }
 
-/// One entry of C and its mirror image, as read by a stage: both finite and equal within rounding.
-/// @return kOk; kNonFinite; kNotSymmetric.
-template <typename T>
-[[nodiscard]] Status check_mirrored(T x, T y) {
-  if (x == y && std::isfinite(x)) return Status::kOk;  // the common case: exactly symmetric
-  if (!std::isfinite(x) || !std::isfinite(y)) return Status::kNonFinite;
-  return nearly_equal(x, y) ? Status::kOk : Status::kNotSymmetric;
-}
-
 /// A 2x2 covariance is acceptable as a measurement noise R when finite, symmetric and positive
 /// definite (both leading minors strictly positive).
 template <typename T>

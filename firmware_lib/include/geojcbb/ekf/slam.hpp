@@ -280,8 +280,9 @@ class Slam {
       rng[k] = r;
       idx[k] = static_cast<std::uint16_t>(j);
     }
+    const Status sized = out.C.resize(n);  // n <= kMaxCandidates by the insertion above
+    if (sized != Status::kOk) return sized;
     out.count = n;
-    out.C.resize(2 * n, 2 * n);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
       out.id[a] = id_[idx[a]];
       out.h[a] = observe(xr, landmark(idx[a]));
@@ -297,8 +298,7 @@ class Slam {
         const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
         Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
         if (a == b) Cab = (T(0.5) * (Cab + Cab.transpose())).eval();  // eval: the transpose aliases Cab
-        out.C.template block<2, 2>(2 * a, 2 * b) = Cab;
-        out.C.template block<2, 2>(2 * b, 2 * a) = Cab.transpose();
+        out.C.set_block(a, b, Cab);  // block (b, a) = Cab^T: C is stored as its lower block triangle
       }
     }
     return Status::kOk;

@@ -33,19 +33,22 @@ bool in_local_region(const AssociationConfig<T, B>& cfg, const Vec2<T>& h) {
   return !cfg.local_region || h.x() < cfg.local_radius_m;
 }
 
-template <typename T, class B>
+/// @tparam PerObservation  candidates held per observation: all of them for the gate's table; the
+///                         merge's repair search holds one (issue 13: 4.4 KB less on the M4F).
+template <typename T, class B, int PerObservation = B::kMaxCandidates>
 struct CompatibilityTable {
+  static constexpr int kPerObservation = PerObservation;
   std::array<std::int16_t, B::kMaxObservations> count;  ///< compatible candidates per observation
   /// cand[i][k]: k-th nearest compatible candidate of observation i (k < count[i]).
-  std::array<std::array<std::int16_t, B::kMaxCandidates>, B::kMaxObservations> cand;
-  std::array<std::array<T, B::kMaxCandidates>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
+  std::array<std::array<std::int16_t, PerObservation>, B::kMaxObservations> cand;
+  std::array<std::array<T, PerObservation>, B::kMaxObservations> d2;  ///< d2 of cand[i][k]
   std::array<bool, B::kMaxCandidates> in_region;
 };
 
 /// d2 of observation i and candidate j (the individual test's statistic).
 template <typename T, class B>
 T individual_d2(const Observations<T, B>& obs, const Prediction<T, B>& pred, int i, int j) {
-  const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + obs.R[i];
+  const Mat2<T> S = pred.C.block(j, j) + obs.R[i];
   return mahalanobis2(innovation(obs.z[i], pred.h[j]), S);
 }
 
@@ -87,7 +90,7 @@ void build_compatibility(const Observations<T, B>& obs, const Prediction<T, B>& 
       const T s_rr = pred.C(2 * j, 2 * j) + R(0, 0);
       const T s_bb = pred.C(2 * j + 1, 2 * j + 1) + R(1, 1);
       if (nu.x() * nu.x() > bound * s_rr || nu.y() * nu.y() > bound * s_bb) continue;
-      const Mat2<T> S = pred.C.template block<2, 2>(2 * j, 2 * j) + R;
+      const Mat2<T> S = pred.C.block(j, j) + R;
       const T d2 = mahalanobis2(nu, S);
       if (!(d2 <= gate)) continue;
       int k = n++;                                     // insertion sort by d2, ties by candidate index (stable)

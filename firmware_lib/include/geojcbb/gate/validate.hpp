@@ -5,7 +5,9 @@
 // off): the call reads nothing else, and the region exists to make a large map cheap.
 // C's cross blocks (issue 13): with CovarianceCheck::kWhereRead (the default) they are checked where
 // a stage reads them (IncrementalJoint::try_push, pair_statistic), with the same statuses; with
-// kFull, here, every pair of candidates in the region. C's off-diagonal definiteness is checked
+// kFull, here, every pair of candidates in the region. The Prediction holds C's lower block triangle
+// (BlockCovariance), so a cross block is symmetric by storage: kNotSymmetric here is a diagonal
+// block's; a dense C's asymmetric cross block is refused where it comes in (assign_dense). C's off-diagonal definiteness is checked
 // where it is used: a non-positive Cholesky pivot in the joint test.
 // Bounds: O(n) over h and C's diagonal blocks (kFull: O(n_region^2) over C), O(m) over observations.
 #pragma once
@@ -83,7 +85,7 @@ template <typename T, class B>
 /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
 template <typename T, class B>
 [[nodiscard]] Status check_diagonal_block(const Prediction<T, B>& pred, int j) {
-  const Mat2<T> Cjj = pred.C.template block<2, 2>(2 * j, 2 * j);
+  const Mat2<T> Cjj = pred.C.block(j, j);
   if (!Cjj.allFinite()) return Status::kNonFinite;
   if (!nearly_equal(Cjj(0, 1), Cjj(1, 0))) return Status::kNotSymmetric;
   return is_psd(Cjj) ? Status::kOk : Status::kNotPositiveDefinite;
@@ -124,7 +126,7 @@ template <typename T, class B, class InRegion>
         }
       }
     }
-    if (!is_psd(Mat2<T>(pred.C.template block<2, 2>(2 * j, 2 * j)))) return Status::kNotPositiveDefinite;
+    if (!is_psd(Mat2<T>(pred.C.block(j, j)))) return Status::kNotPositiveDefinite;
   }
   return Status::kOk;
 }

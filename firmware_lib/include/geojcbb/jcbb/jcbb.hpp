@@ -60,8 +60,8 @@ struct ObservationSubset {
 /// The levels of the interpretation tree: observations of the subset with at least one compatible
 /// candidate, in observation order or (stably) by fewest candidates first. Returns the number of
 /// levels.  Bound: insertion sort of <= MaxObservations entries.
-template <typename T, class B>
-int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first, ObservationSubset subset,
+template <typename T, class B, int K>
+int search_order(const CompatibilityTable<T, B, K>& table, int m, bool fewest_first, ObservationSubset subset,
                  std::array<std::uint8_t, B::kMaxObservations>& order) {
   int levels = 0;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
@@ -85,9 +85,9 @@ int search_order(const CompatibilityTable<T, B>& table, int m, bool fewest_first
 /// @return kOk (also when the node budget ran out: see out.budget_hit); kNotPositiveDefinite when a
 ///         joint covariance has a non-positive pivot (C not PSD). On error `out` is unspecified.
 ///         out.best is -1 outside the subset.
-template <typename T, class B>
+template <typename T, class B, int K>
 [[nodiscard]] Status jcbb_search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                 const AssociationConfig<T, B>& cfg, const CompatibilityTable<T, B>& table,
+                                 const AssociationConfig<T, B>& cfg, const CompatibilityTable<T, B, K>& table,
                                  ObservationSubset subset, NodeCount node_budget, JcbbWorkspace<T, B>& ws,
                                  SearchOutcome<T, B>& out,
                                  const std::array<std::int16_t, B::kMaxObservations>* prefix = nullptr) {

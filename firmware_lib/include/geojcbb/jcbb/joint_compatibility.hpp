@@ -5,8 +5,9 @@
 // Since C_H is PSD and R_i is PD, every new pivot is at least lambda_min(R_i) in exact arithmetic;
 // a non-positive pivot therefore means C is not PSD, and is reported as kNotPositiveDefinite.
 // Issue 13: try_push reads C's cross blocks between the new candidate and the held ones, and (unless
-// told the caller checked all of C) checks each entry it reads against its mirror image (finite,
-// symmetric): C is validated where the joint test reads it.
+// told the caller checked all of C) checks each entry it reads is finite: C is validated where the
+// joint test reads it. C is symmetric by storage (BlockCovariance keeps one copy of a cross block; a
+// dense C's asymmetry is refused where it comes in, BlockCovariance::assign_dense).
 #pragma once
 
 #include <array>
@@ -33,35 +34,35 @@ class IncrementalJoint {
   T d2() const { return d2_[pairs_]; }
 
   /// Computes the joint d2 of the held hypothesis plus one pairing, without keeping it.
-  /// @param C     predicted-measurement covariance (2n x 2n; candidate j at rows 2j, 2j+1)
+  /// @param C     predicted-measurement covariance (2n x 2n, symmetric: C(r, c) is C(c, r); candidate j
+  ///              at rows 2j, 2j+1), e.g. a Prediction's BlockCovariance
   /// @param cand  candidate index of the new pairing
   /// @param R     the observation's noise
   /// @param nu    the pair's innovation z_i - h_j (bearing wrapped)
   /// @param[out] d2_out  joint d2 with the new pairing
-  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNonFinite / kNotSymmetric for a cross
-  ///         entry of C read here that is not finite or differs from its mirror image (when checking
-  ///         reads); kNotPositiveDefinite for a pivot <= 0. Nothing held changes unless kOk.
+  /// @return kOk; kCapacityExceeded when MaxPairs are held; kNonFinite for a cross entry of C read
+  ///         here that is not finite (when checking reads); kNotPositiveDefinite for a pivot <= 0.
+  ///         Nothing held changes unless kOk.
   template <class CMatrix>
   [[nodiscard]] Status try_push(const CMatrix& C, int cand, const Mat2<T>& R, const Vec2<T>& nu, T& d2_out) {
     if (pairs_ >= MaxPairs) return Status::kCapacityExceeded;
     const int n = 2 * pairs_;  // rows held
-    T* row0 = &L_[static_cast<std::size_t>(n) * kRows];
-    T* row1 = row0 + kRows;
+    T* row0 = &L_[row_start(n)];
+    T* row1 = row0 + n + 1;  // row n holds n + 1 entries
     const int r0 = 2 * cand;
     if (check_reads_) {
       for (int p = 0; p < pairs_; ++p) {  // <= MaxPairs: the cross block of each held candidate
         const int c0 = 2 * cand_[p];
         for (int a = 0; a < 2; ++a) {
           for (int b = 0; b < 2; ++b) {
-            const Status s = check_mirrored(C(r0 + a, c0 + b), C(c0 + b, r0 + a));
-            if (s != Status::kOk) return s;
+            if (!std::isfinite(C(r0 + a, c0 + b))) return Status::kNonFinite;
           }
         }
       }
     }
     // X = B L^-T, B = cross covariance of the new rows with the held ones (R has no cross terms).
     for (int c = 0; c < n; ++c) {  // <= 2 MaxPairs
-      const T* lc = &L_[static_cast<std::size_t>(c) * kRows];
+      const T* lc = &L_[row_start(c)];
       const int cc = 2 * cand_[c / 2] + (c % 2);
       T s0 = C(r0, cc);
       T s1 = C(r0 + 1, cc);
@@ -110,9 +111,15 @@ class IncrementalJoint {
   void pop() { --pairs_; }
 
  private:
-  std::array<T, static_cast<std::size_t>(kRows) * kRows> L_{};  // row-major, lower triangle
-  std::array<T, kRows> y_{};                                    // L^-1 nu_H
-  std::array<T, MaxPairs + 1> d2_{};                            // d2_[p]: joint d2 of p pairings
+  /// Where row r of the packed lower triangle starts: rows 0 .. r - 1 hold 1 + 2 + ... + r entries.
+  static constexpr std::size_t row_start(int r) {
+    return static_cast<std::size_t>(r) * static_cast<std::size_t>(r + 1) / 2;
+  }
+
+  // L, lower triangle packed row by row (row r: entries 0 .. r). Issue 13: half the square it was.
+  std::array<T, static_cast<std::size_t>(kRows) * (kRows + 1) / 2> L_{};
+  std::array<T, kRows> y_{};          // L^-1 nu_H
+  std::array<T, MaxPairs + 1> d2_{};  // d2_[p]: joint d2 of p pairings
   std::array<std::int16_t, MaxPairs> cand_{};
   int pairs_ = 0;
   bool check_reads_ = true;

@@ -32,7 +32,7 @@ struct MergeStats {
 
 template <typename T, class B>
 struct MergeWorkspace {
-  CompatibilityTable<T, B> reduced;  ///< one candidate per observation, for the repair search
+  CompatibilityTable<T, B, 1> reduced;  ///< one candidate per observation, for the repair search
   Hypothesis<B> trial;
   SearchOutcome<T, B> repair;
 };

@@ -71,9 +71,9 @@ bool to_inputs(const Scene& s, Observations<T, B>& obs, Prediction<T, B>& pred) 
     obs.z[i] = s.z[i].cast<T>();
     obs.R[i] = s.R.cast<T>();
   }
+  // The scene's C is exactly symmetric (predict_measurements); the packed C holds its lower blocks.
+  if (pred.C.assign_dense(s.C) != Status::kOk) return false;
   pred.count = n;
-  pred.C.resize(2 * n, 2 * n);
-  pred.C = s.C.cast<T>();
   for (int j = 0; j < n; ++j) {
     pred.id[j] = j;
     pred.h[j] = s.h[j].cast<T>();
