@@ -207,8 +207,8 @@ SlamSession::~SlamSession() = default;
 
 Pose2<double> SlamSession::pose() const { return st_->step.slam().pose(); }
 
-void SlamSession::predict(double v, double w, double dt, double sv, double sw) {
-  check(st_->step.predict(ekf::Odometry<double>{v, w, dt, sv, sw}), "predict");
+void SlamSession::predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps) {
+  check(st_->step.predict(ekf::Odometry<double>{v_mps, w_radps, dt_s, sigma_v_mps, sigma_w_radps}), "predict");
 }
 
 void SlamSession::relocalise(const Eigen::Matrix3d& P) {

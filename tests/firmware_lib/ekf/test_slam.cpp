@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -437,4 +438,27 @@ TEST_CASE_TEMPLATE("predict: odometry that would overflow the covariance is refu
   CHECK(s->predict(Odometry<T>{huge, T(0.1), T(1), T(0.05), T(0.01)}) == Status::kNonFinite);
   CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
   CHECK(s->predict(Odometry<T>{T(0.5), T(0.1), T(0.1), T(0.05), T(0.01)}) == Status::kOk);
+}
+
+// Found by tests/fuzz/fuzz_associate: a finite sigma whose square is finite (1e17 in float: 1e34)
+// swamps the pose's own covariance; x and y, both driven by the one sigma_v, become fully
+// correlated by rounding, and predict() returned kOk with a pose block that is not positive
+// definite. The check is scale-free (the correlation matrix), so it cannot overflow either.
+TEST_CASE_TEMPLATE("predict: odometry that would leave the pose block singular is refused, nothing changed", T, float,
+                   double) {
+  auto s = std::make_unique<Slam<T, EB>>();
+  REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.7)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  std::vector<unsigned char> before(sizeof(*s));  // bytes, padding included
+  std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+  // sigma_v such that sigma_v^2 * 1 is 1e18 times the prior's 0.01 in float, 1e34 in double: both
+  // lose the prior's variance entirely next to it.
+  const T sigma_v = std::is_same<T, float>::value ? T(1e8) : T(1e17);
+  CHECK(s->predict(Odometry<T>{T(0.5), T(0), T(1), sigma_v, T(0)}) == Status::kNotPositiveDefinite);
+  CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+  // A large but representable noise is taken: the pose block stays positive definite.
+  CHECK(s->predict(Odometry<T>{T(0.5), T(0), T(1), T(10), T(0.01)}) == Status::kOk);
+  Mat3<T> P;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) P(r, c) = s->cov(r, c);
+  CHECK(is_spd_scaled(P));
 }

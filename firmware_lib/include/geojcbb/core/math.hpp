@@ -64,6 +64,24 @@ bool is_spd(const Mat2<T>& m) {
          m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0) > T(0);
 }
 
+/// A 3x3 covariance is positive definite beyond rounding: its correlation matrix (scale-free, so no
+/// overflow or underflow at any magnitude of the variances) has both leading minors past the
+/// first above 64 epsilon. (Sylvester on the raw entries overflows at 1e20 in float and calls a
+/// matrix that rounding made singular definite.)
+template <typename T>
+bool is_spd_scaled(const Mat3<T>& m) {
+  T d[3];
+  for (int i = 0; i < 3; ++i) {  // <= 3
+    if (!(m(i, i) > T(0)) || !std::isfinite(m(i, i))) return false;
+    d[i] = T(1) / std::sqrt(m(i, i));
+  }
+  const T a = m(0, 1) * d[0] * d[1], b = m(0, 2) * d[0] * d[2], c = m(1, 2) * d[1] * d[2];
+  const T tol = T(64) * std::numeric_limits<T>::epsilon();
+  const T m2 = T(1) - a * a;
+  const T m3 = T(1) + T(2) * a * b * c - a * a - b * b - c * c;
+  return m2 > tol && m3 > tol;  // false for NaN
+}
+
 /// A 2x2 block of a predicted-measurement covariance C may be singular (a perfectly known feature)
 /// but never indefinite.
 template <typename T>

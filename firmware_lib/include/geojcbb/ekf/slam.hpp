@@ -232,6 +232,10 @@ class Slam {
     if (!std::isfinite(next.x) || !std::isfinite(next.y) || !std::isfinite(next.theta) || !Prr.allFinite()) {
       return Status::kNonFinite;
     }
+    // Finite but singular by rounding (a sigma near 1e19 in float: the motion noise swamps the
+    // pose's own covariance, and the correlation of x and y, both driven by one sigma_v, rounds to
+    // 1): refused, nothing changed (fuzz_associate's finding).
+    if (!is_spd_scaled<T>(Mat3<T>(T(0.5) * (Prr + Prr.transpose())))) return Status::kNotPositiveDefinite;
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
       if (!(F * block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
     }

@@ -203,8 +203,8 @@ class RunSource {
 class RecordedSource : public RunSource {
  public:
   RecordedSource() = default;
-  /// Every input of `source` (from its current position), with its sensor and start.
-  explicit RecordedSource(RunSource& source);
+  /// Every input of `src` (from its current position), with its sensor and start.
+  explicit RecordedSource(RunSource& src);
   bool next(RunInput& in) override;
   void rewind() override { at_ = 0; }
   const std::vector<RunInput>& inputs() const { return inputs_; }
@@ -261,7 +261,7 @@ class SlamSession {
   /// One scan; each observation's truth is a landmark index < true_landmarks,
   /// or -1 for clutter. `truth` is the true pose at the scan, for the pose
   /// error and NEES (nullptr: not recorded).
-  void scan(std::vector<SimObservation> observations, double t_s, const Pose2<double>* truth);
+  void scan(std::vector<SimObservation> scan, double t_s, const Pose2<double>* truth);
   Pose2<double> pose() const;
   /// The result so far; finish() adds the final map and the means.
   RunResult finish();
@@ -273,7 +273,7 @@ class SlamSession {
 };
 
 /// Runs a source's inputs through a SlamSession. Throws as SlamSession does.
-RunResult run_inputs(RunSource& source, const RunOptions& options);
+RunResult run_inputs(RunSource& src, const RunOptions& opt);
 /// Who runs a run's inputs: run_inputs in process, or a device over the link (geojcbb_eval --port).
 using RunInputsFn = std::function<RunResult(RunSource&, const RunOptions&)>;
 

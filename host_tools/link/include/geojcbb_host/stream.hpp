@@ -35,7 +35,7 @@ proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o);
 /// RESET at x0 with P0, each diagonal element at least 1e-6 (the float filter's floor).
 proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0);
 proto::Reset link_reset(const Scenario& sc);
-proto::Odometry link_odometry(const RunInput& prediction);
+proto::Odometry link_odometry(const RunInput& in);
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step);
 /// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with its
 /// covariance; `kept` receives their truths.
@@ -95,7 +95,7 @@ struct StreamOptions {
 /// its final map. RunResult::association_s sums each batch's time from sending to its reply.
 /// A LinkError kRestart from the link rewinds the source and starts the run again.
 /// Throws LinkError on a link failure, and when a reply does not match its batch.
-RunResult stream_run(ScanLink& link, RunSource& source, const RunOptions& o, const StreamOptions& so = {});
+RunResult stream_run(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so = {});
 
 /// stream_run over one seed of a simulated scenario (window 1).
 RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
