@@ -64,6 +64,7 @@ void QemuMachine::start(const QemuOptions& o) {
   if (pid_ < 0) throw std::runtime_error("fork failed");
   if (pid_ == 0) {
     std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
     execvp(argv[0], argv.data());
