@@ -72,7 +72,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
       b.started = true;
     };
   }
-  const RunResult r = stream_scenario(link, sc, seed, s, o, hook);
+  RunResult r = stream_scenario(link, sc, seed, s, o, hook);
   if (mirror) mirror_report = mirror->report();
   return r;
 }

@@ -111,7 +111,7 @@ TEST_CASE("node: a lossy channel over 12,000 frames: faults counted exactly, no 
   int drops = 0, dups = 0, swaps = 0, flips = 0, bursts = 0, good = 0;
   for (int i = 0; i < kFrames; ++i) {
     if (i + 1 < kFrames && u(rng) < 0.02) {  // reorder: send the next frame first
-      std::swap(frames[static_cast<std::size_t>(i)], frames[static_cast<std::size_t>(i + 1)]);
+      std::swap(frames[static_cast<std::size_t>(i)], frames[static_cast<std::size_t>(i) + 1]);
       ++swaps;
     }
     std::vector<std::uint8_t> f = frames[static_cast<std::size_t>(i)];

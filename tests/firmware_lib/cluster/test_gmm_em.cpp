@@ -189,6 +189,7 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
   for (int rep = 0; rep < 50; ++rep) {
     std::uniform_real_distribution<double> u(-12, 12);
     std::vector<Blob> blobs;
+    blobs.reserve(3);
     for (int b = 0; b < 3; ++b) blobs.push_back({{u(rng), u(rng)}, s, 4 + static_cast<int>(rng() % 5)});
     Points<T, Small> p;
     std::vector<int> truth;
@@ -236,6 +237,7 @@ TEST_CASE("EM in float finds the groups and the K of EM in double") {
     std::uniform_real_distribution<double> u(-15, 15);
     std::vector<Blob> blobs;
     const int nb = 1 + static_cast<int>(rng() % 4);
+    blobs.reserve(static_cast<std::size_t>(nb));
     for (int b = 0; b < nb; ++b) blobs.push_back({{u(rng), u(rng)}, s, 5});
     Points<double, Small> pd;
     std::vector<int> truth;
