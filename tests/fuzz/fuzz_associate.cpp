@@ -59,10 +59,11 @@ struct Input : fuzz::Bytes {
   }
 };
 
-/// A copy of an object's bytes, to prove an output untouched.
+/// A copy of an object's bytes (its object representation, read, never written back), to prove an
+/// output untouched.
 template <class O>
 struct Snapshot {
-  explicit Snapshot(const O& o) { std::memcpy(bytes.data(), &o, sizeof(O)); }
+  explicit Snapshot(const O& o) { std::memcpy(bytes.data(), static_cast<const void*>(&o), sizeof(O)); }
   bool same(const O& o) const { return std::memcmp(bytes.data(), &o, sizeof(O)) == 0; }
   std::array<unsigned char, sizeof(O)> bytes;
 };

@@ -168,8 +168,9 @@ TEST_CASE("replay: a hand-made log, its labels, noise and start") {
     s << "truth," << t << ',' << t << ",0,0\n";
     s << "odom," << t << ",1,0\n";
     if (k % 2 == 0 && k > 0) {
+      const double half = 0.5 * k;  // k even: a whole number
       s << "meas," << t << ',' << std::hypot(5 - t, 1.0) << ',' << std::atan2(1.0, 5 - t) << ",A\n";
-      s << "meas," << t << ",3," << 0.3 * (k / 2) - 1.5 << ",robot7\n";
+      s << "meas," << t << ",3," << 0.3 * half - 1.5 << ",robot7\n";
     }
   }
   std::istringstream in(s.str());

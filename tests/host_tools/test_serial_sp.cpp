@@ -154,8 +154,8 @@ TEST_CASE("SpSerial on a pty (through the shim): bytes both ways, modem lines se
   CHECK((lines & TIOCM_DTR) != 0);
   CHECK((lines & TIOCM_RTS) != 0);
 
-  const std::string hello = "HELLO\0\x11\x13\r\n\xff";  // NUL, XON/XOFF, CR/LF pass untouched (raw mode)
-  const std::vector<std::uint8_t> up(hello.begin(), hello.end());
+  // NUL, XON/XOFF, CR/LF pass untouched (raw mode).
+  const std::vector<std::uint8_t> up = {'H', 'E', 'L', 'L', 'O', 0x00, 0x11, 0x13, '\r', '\n', 0xff};
   port.write(up.data(), up.size());
   CHECK(read_n(pty, up.size()) == up);
   const std::vector<std::uint8_t> down = pattern(300, 7);

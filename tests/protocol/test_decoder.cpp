@@ -134,7 +134,9 @@ TEST_CASE("protocol: every single-bit flip of small frames is rejected and count
       {"ODOMETRY", frame_of(sample<Odometry>(), 4)},
       {"OBS_BATCH x3", frame_of(obs_batch(3), 5)},
   };
-  for (const auto& [name, wire] : frames) {
+  for (const auto& named : frames) {
+    const char* const name = named.first;  // a variable, not a binding: CAPTURE's lambda takes it
+    const Bytes& wire = named.second;
     CAPTURE(name);
     const Bytes body(wire.begin(), wire.end() - 1);
     const std::vector<bool> is_code = code_bytes(body);

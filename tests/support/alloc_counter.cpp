@@ -16,26 +16,30 @@ std::atomic<std::uint64_t> g_malloc{0};
 #else
 #define GEOJCBB_TEST_COUNT_MALLOC 1
 // glibc's own entry points: interposing malloc in the test executable counts every call made by
-// any code in the process (libstdc++, Eigen, ours) and forwards it.
+// any code in the process (libstdc++, Eigen, ours) and forwards it. An interposer uses glibc's
+// reserved names (__libc_*), and its parameters keep <stdlib.h>'s names so that the definitions match
+// the declarations they replace.
+// NOLINTBEGIN(bugprone-reserved-identifier)
 extern "C" {
 void* __libc_malloc(std::size_t);
 void* __libc_calloc(std::size_t, std::size_t);
 void* __libc_realloc(void*, std::size_t);
 void __libc_free(void*);
-void* malloc(std::size_t n) {
+void* malloc(std::size_t __size) {
   g_malloc.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
+  return __libc_malloc(__size);
 }
-void* calloc(std::size_t a, std::size_t b) {
+void* calloc(std::size_t __nmemb, std::size_t __size) {
   g_malloc.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(a, b);
+  return __libc_calloc(__nmemb, __size);
 }
-void* realloc(void* p, std::size_t n) {
+void* realloc(void* __ptr, std::size_t __size) {
   g_malloc.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, n);
+  return __libc_realloc(__ptr, __size);
 }
-void free(void* p) { __libc_free(p); }
+void free(void* __ptr) { __libc_free(__ptr); }
 }
+// NOLINTEND(bugprone-reserved-identifier)
 #endif
 
 namespace {

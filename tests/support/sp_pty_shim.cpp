@@ -95,6 +95,10 @@ int forward_lstat(const char* path, struct stat* buf) {
 
 extern "C" {
 
+// Interposers keep glibc's reserved names, and lstat's parameters <sys/stat.h>'s names, so that the
+// definitions match the declarations they replace.
+// NOLINTBEGIN(bugprone-reserved-identifier)
+
 // glibc's old stat entry point, which libserialport 0.1.1 (Debian 12) calls for lstat().
 int __lxstat(int ver, const char* path, struct stat* buf);
 int __lxstat(int /*ver*/, const char* path, struct stat* buf) {
@@ -102,10 +106,11 @@ int __lxstat(int /*ver*/, const char* path, struct stat* buf) {
   return forward_lstat(path, buf);  // x86-64: _STAT_VER's layout is struct stat
 }
 
-int lstat(const char* __restrict path, struct stat* __restrict buf) noexcept {
-  if (pty_sysfs_number(path) != nullptr) return fake_link_stat(buf);
-  return forward_lstat(path, buf);
+int lstat(const char* __restrict __file, struct stat* __restrict __buf) noexcept {
+  if (pty_sysfs_number(__file) != nullptr) return fake_link_stat(__buf);
+  return forward_lstat(__file, __buf);
 }
+// NOLINTEND(bugprone-reserved-identifier)
 
 ssize_t readlink(const char* __restrict path, char* __restrict buf, size_t len) noexcept {
   if (const char* n = pty_sysfs_number(path)) {

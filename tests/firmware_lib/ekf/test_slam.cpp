@@ -462,3 +462,63 @@ TEST_CASE_TEMPLATE("predict: odometry that would leave the pose block singular i
     for (int c = 0; c < 3; ++c) P(r, c) = s->cov(r, c);
   CHECK(is_spd_scaled(P));
 }
+
+// Found by tests/fuzz/fuzz_node: RESET with a finite variance above half the scalar's max (2e38 in
+// float) was accepted and then symmetrised as (P + P^T) / 2, whose sum overflowed: P became
+// infinite. The symmetric part is now taken without overflow, the prior's definiteness is tested on
+// its correlation matrix (Sylvester's raw minors overflowed too), and a pair like 3e38 / -3e38 is
+// no longer "nearly equal".
+TEST_CASE_TEMPLATE("reset and relocalise: a huge but finite prior stays finite; overflowing checks refuse", T, float,
+                   double) {
+  const T big = std::numeric_limits<T>::max() / T(1.5);  // above max / 2: P + P^T overflows
+  Mat3<T> P0;
+  P0 << big, T(0.001), T(0.001), T(0.001), T(0.01), T(0.001), T(0.001), T(0.001), big;
+  auto s = std::make_unique<Slam<T, EB>>();
+  REQUIRE(s->reset(Pose2<T>{T(0), T(0), T(0)}, P0) == Status::kOk);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) CHECK(s->cov(r, c) == P0(r, c));
+  REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  FeatureId id = 0;
+  REQUIRE(s->augment(Vec2<T>(T(3), T(0.4)), Mat2<T>::Identity() * T(0.01), id) == Status::kOk);
+  REQUIRE(s->relocalise(Pose2<T>{T(5), T(-1), T(1)}, P0) == Status::kOk);
+  for (int r = 0; r < s->dim(); ++r)
+    for (int c = 0; c < s->dim(); ++c) CHECK(std::isfinite(s->cov(r, c)));
+  CHECK(s->cov(0, 0) == big);
+
+  std::vector<unsigned char> before(sizeof(*s));  // bytes, padding included
+  std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+  // Opposite off-diagonals at the scalar's edge: |a - b| overflowed, and inf <= inf called them equal.
+  Mat3<T> asym = Mat3<T>::Identity() * big;
+  asym(0, 1) = big;
+  asym(1, 0) = -big;
+  CHECK(s->reset(Pose2<T>{T(0), T(0), T(0)}, asym) == Status::kNotSymmetric);
+  // Indefinite, with entries whose raw 2x2 and 3x3 minors overflow: correlation of x and y above 1.
+  Mat3<T> indefinite = Mat3<T>::Identity() * big;
+  indefinite(0, 1) = indefinite(1, 0) = big;
+  indefinite(1, 1) = big / T(4);
+  CHECK(s->reset(Pose2<T>{T(0), T(0), T(0)}, indefinite) == Status::kNotPositiveDefinite);
+  CHECK(s->relocalise(Pose2<T>{T(0), T(0), T(0)}, indefinite) == Status::kNotPositiveDefinite);
+  CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+}
+
+TEST_CASE_TEMPLATE("symmetric_part equals (M + M^T) / 2 for normal numbers and stays finite at the edge", T, float,
+                   double) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-100.0, 100.0);
+  for (int k = 0; k < 200; ++k) {  // bit for bit against the textbook form
+    Mat3<T> m;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) m(r, c) = T(u(rng));
+    const Mat3<T> a = symmetric_part(m);
+    const Mat3<T> b = T(0.5) * (m + m.transpose());
+    CHECK(std::memcmp(a.data(), b.data(), sizeof a) == 0);
+  }
+  const T big = std::numeric_limits<T>::max();
+  Mat2<T> e;
+  e << big, big, big / T(2), big;
+  const Mat2<T> s = symmetric_part(e);
+  CHECK(s.allFinite());
+  CHECK(s(0, 0) == big);
+  CHECK(s(0, 1) == s(1, 0));
+  CHECK(s(0, 1) == T(0.75) * big);
+}

@@ -50,10 +50,32 @@ bool all_finite(const Eigen::MatrixBase<Derived>& m) {
 template <typename T>
 constexpr T kCovarianceTolerance = T(1024) * std::numeric_limits<T>::epsilon();
 
-/// True when |a - b| is within rounding of their magnitudes.
+/// True when |a - b| is within rounding of their magnitudes. Both are halved first (exact for normal
+/// numbers), so that no finite pair overflows the test: 3e38 and -3e38 in float are not "nearly
+/// equal" (unhalved, inf <= inf said they were).
 template <typename T>
 bool nearly_equal(T a, T b) {
-  return std::abs(a - b) <= kCovarianceTolerance<T> * (std::abs(a) + std::abs(b)) + std::numeric_limits<T>::min();
+  const T ha = T(0.5) * a, hb = T(0.5) * b;
+  return std::abs(ha - hb) <= kCovarianceTolerance<T> * (std::abs(ha) + std::abs(hb)) + std::numeric_limits<T>::min();
+}
+
+/// The symmetric part (M + M^T) / 2 of a small square matrix, without overflow at any finite
+/// magnitude: the diagonal is copied, each off-diagonal pair becomes a/2 + b/2. For normal numbers
+/// this equals (M + M^T) / 2 bit for bit (halving is exact, and so is doubling a + a); unlike it, a
+/// finite variance above half the scalar's max stays finite (fuzz_node's finding: RESET with a
+/// variance of 2e38 in float made P infinite).
+template <typename T, int N>
+Eigen::Matrix<T, N, N> symmetric_part(const Eigen::Matrix<T, N, N>& m) {
+  Eigen::Matrix<T, N, N> s;
+  for (int r = 0; r < N; ++r) {  // <= N
+    s(r, r) = m(r, r);
+    for (int c = 0; c < r; ++c) {  // <= N
+      const T v = T(0.5) * m(r, c) + T(0.5) * m(c, r);
+      s(r, c) = v;
+      s(c, r) = v;
+    }
+  }
+  return s;
 }
 
 /// A 2x2 covariance is acceptable as a measurement noise R when finite, symmetric and positive

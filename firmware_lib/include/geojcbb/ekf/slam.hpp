@@ -152,7 +152,7 @@ class Slam {
     x_[0] = x0.x;
     x_[1] = x0.y;
     x_[2] = wrap_angle(x0.theta);
-    set_sym<3>(0, T(0.5) * (P0 + P0.transpose()));
+    set_sym<3>(0, symmetric_part(P0));
     return Status::kOk;
   }
 
@@ -167,7 +167,7 @@ class Slam {
     x_[1] = x.y;
     x_[2] = wrap_angle(x.theta);
     updated_ = false;
-    set_sym<3>(0, T(0.5) * (Pxx + Pxx.transpose()));
+    set_sym<3>(0, symmetric_part(Pxx));
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
       set_block<3, 2>(0, Layout::landmark(j), Mat32<T>::Zero());
     }
@@ -235,11 +235,12 @@ class Slam {
     // Finite but singular by rounding (a sigma near 1e19 in float: the motion noise swamps the
     // pose's own covariance, and the correlation of x and y, both driven by one sigma_v, rounds to
     // 1): refused, nothing changed (fuzz_associate's finding).
-    if (!is_spd_scaled<T>(Mat3<T>(T(0.5) * (Prr + Prr.transpose())))) return Status::kNotPositiveDefinite;
+    const Mat3<T> Prr_sym = symmetric_part(Prr);
+    if (!is_spd_scaled<T>(Prr_sym)) return Status::kNotPositiveDefinite;
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
       if (!(F * block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
     }
-    set_sym<3>(0, T(0.5) * (Prr + Prr.transpose()));
+    set_sym<3>(0, Prr_sym);
     for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks: only the pose rows change, O(n)
       const int l = Layout::landmark(j);
       set_block<3, 2>(0, l, F * block<3, 2>(0, l));
@@ -301,7 +302,7 @@ class Slam {
         const int lb = Layout::landmark(idx[b]);
         const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
         Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
-        if (a == b) Cab = (T(0.5) * (Cab + Cab.transpose())).eval();  // eval: the transpose aliases Cab
+        if (a == b) Cab = symmetric_part(Cab);
         out.C.set_block(a, b, Cab);  // block (b, a) = Cab^T: C is stored as its lower block triangle
       }
     }
@@ -459,9 +460,8 @@ class Slam {
     // covariance before writing any of them.
     const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose()))))
-      return Status::kNotPositiveDefinite;  // R at rounding's edge
-    for (int c = 0; c < n; ++c) {           // <= kMaxState
+    if (!is_spd(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // R at rounding's edge
+    for (int c = 0; c < n; ++c) {                                           // <= kMaxState
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
         for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
@@ -475,7 +475,7 @@ class Slam {
         P(c, k + u) = s;
       }
     }
-    set_sym<2>(k, T(0.5) * (Pll + Pll.transpose()));
+    set_sym<2>(k, symmetric_part(Pll));
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
@@ -489,15 +489,14 @@ class Slam {
   ///         unless kOk.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(Mat2<T>(T(0.5) * (Pll + Pll.transpose()))))
-      return Status::kNotPositiveDefinite;  // R at rounding's edge
+    if (!is_spd(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // R at rounding's edge
     if (!is_spd(Pll)) return Status::kNotPositiveDefinite;
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
     for (int c = 0; c < k; ++c) {  // <= kMaxState
       for (int u = 0; u < 2; ++u) P(c, k + u) = T(0);
     }
-    set_sym<2>(k, T(0.5) * (Pll + Pll.transpose()));
+    set_sym<2>(k, symmetric_part(Pll));
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
@@ -649,12 +648,9 @@ class Slam {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < r; ++c)
         if (!nearly_equal(P0(r, c), P0(c, r))) return Status::kNotSymmetric;
-    // Sylvester: every leading minor positive.
-    const T m1 = P0(0, 0), m2 = P0(0, 0) * P0(1, 1) - P0(0, 1) * P0(1, 0);
-    const T m3 = P0(0, 0) * (P0(1, 1) * P0(2, 2) - P0(1, 2) * P0(2, 1)) -
-                 P0(0, 1) * (P0(1, 0) * P0(2, 2) - P0(1, 2) * P0(2, 0)) +
-                 P0(0, 2) * (P0(1, 0) * P0(2, 1) - P0(1, 1) * P0(2, 0));
-    if (!(m1 > T(0) && m2 > T(0) && m3 > T(0))) return Status::kNotPositiveDefinite;
+    // Positive definite beyond rounding, on the correlation matrix: Sylvester on the raw entries
+    // overflows (a variance of 1e20 in float) and then calls an indefinite matrix definite.
+    if (!is_spd_scaled<T>(symmetric_part(P0))) return Status::kNotPositiveDefinite;
     return Status::kOk;
   }
   /// P <- P - V V^T over the packed upper triangle (the K columns of ws.V); a variance that
