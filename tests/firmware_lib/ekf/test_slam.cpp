@@ -522,3 +522,54 @@ TEST_CASE_TEMPLATE("symmetric_part equals (M + M^T) / 2 for normal numbers and s
   CHECK(s(0, 1) == s(1, 0));
   CHECK(s(0, 1) == T(0.75) * big);
 }
+
+// Found by tests/fuzz/fuzz_node: odometry with a large (valid) sigma left the pose variances near
+// 1e6 next to a landmark's 1e-2; the next update's S was positive definite, but P - V V^T lost
+// every digit in float and left the pose block indefinite. update() now computes the pose block and
+// every landmark block as the downdate will write them and refuses (first block: nothing changed)
+// or skips (later blocks) an update that would leave one of them not positive definite.
+TEST_CASE_TEMPLATE("update: a downdate that rounding would leave indefinite is refused, nothing changed", T, float,
+                   double) {
+  int refused = 0, taken = 0;
+  for (double sigma = 1.0; sigma <= 1e5; sigma *= 1.5) {  // <= 29 steps
+    CAPTURE(sigma);
+    auto f = std::make_unique<Fixture<T>>();
+    Mat3<T> P0 = Mat3<T>::Zero();
+    P0.diagonal() << T(0.01), T(0.01), T(0.001);
+    REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, P0) == Status::kOk);
+    Mat2<T> R;
+    R << T(0.01), T(0), T(0), T(3e-4);
+    FeatureId id = 0;
+    REQUIRE(f->slam.augment(Vec2<T>(T(2.0), T(0.3)), R, id) == Status::kOk);
+    REQUIRE(f->slam.augment(Vec2<T>(T(3.0), T(-0.4)), R, id) == Status::kOk);
+    if (f->slam.predict(Odometry<T>{T(0.5), T(0.1), T(0.1), T(sigma), T(sigma)}) != Status::kOk) continue;
+    f->obs.clear();
+    for (int j = 0; j < 2; ++j) {
+      const Vec2<T> z = observe(f->slam.pose(), f->slam.landmark(j)) + Vec2<T>(T(0.05), T(-0.01));
+      REQUIRE(f->obs.push(z, R) == Status::kOk);
+    }
+    f->assoc.count = 2;
+    f->assoc.feature[0] = f->slam.id(0);
+    f->assoc.feature[1] = f->slam.id(1);
+    std::vector<unsigned char> before(sizeof(f->slam));  // bytes, padding included
+    std::memcpy(before.data(), static_cast<const void*>(&f->slam), sizeof(f->slam));
+    const Status st = f->slam.update(f->obs, f->assoc, f->ws);
+    REQUIRE((st == Status::kOk || st == Status::kNotPositiveDefinite));
+    if (st == Status::kNotPositiveDefinite) {
+      ++refused;
+      CHECK(std::memcmp(static_cast<const void*>(&f->slam), before.data(), sizeof(f->slam)) == 0);
+      continue;
+    }
+    ++taken;
+    Mat3<T> Prr;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) Prr(r, c) = f->slam.cov(r, c);
+    CHECK(is_spd_scaled(Prr));
+    for (int j = 0; j < 2; ++j) {
+      const int l = Layout::landmark(j);
+      CHECK(is_spd_scaled(f->slam.cov(l, l), f->slam.cov(l, l + 1), f->slam.cov(l + 1, l + 1)));
+    }
+  }
+  CHECK(taken > 0);
+  if (std::is_same<T, float>::value) CHECK(refused > 0);  // float cannot take the largest of these
+}

@@ -104,6 +104,16 @@ bool is_spd_scaled(const Mat3<T>& m) {
   return m2 > tol && m3 > tol;  // false for NaN
 }
 
+/// A 2x2 covariance [a b; b d] is positive definite beyond rounding: both variances positive and
+/// finite, and the correlation b / sqrt(a d) (computed without overflow) at most 1 - 64 epsilon in
+/// squared magnitude, as is_spd_scaled for 3x3.
+template <typename T>
+bool is_spd_scaled(T a, T b, T d) {
+  if (!(a > T(0)) || !(d > T(0)) || !std::isfinite(a) || !std::isfinite(d) || !std::isfinite(b)) return false;
+  const T r = b * (T(1) / std::sqrt(a)) * (T(1) / std::sqrt(d));
+  return T(1) - r * r > T(64) * std::numeric_limits<T>::epsilon();  // false for NaN
+}
+
 /// A 2x2 block of a predicted-measurement covariance C may be singular (a perfectly known feature)
 /// but never indefinite.
 template <typename T>

@@ -406,9 +406,22 @@ class Slam {
           L[i][j] = s / L[j][j];
         }
       }
+      for (int r = 0; r < n && spd; ++r) {  // V <- A L^-T (per row);  <= kMaxState
+        for (int i = 0; i < k; ++i) {       // <= K
+          T v = V(r, i);
+          for (int t = 0; t < i; ++t) v -= L[i][t] * V(r, t);
+          V(r, i) = v / L[i][i];
+        }
+      }
+      // S positive definite is not enough in floating point: a pose variance many orders above the
+      // landmark's (float, 1e6 against 1e-2) loses every digit in P - V V^T, and the result can be
+      // indefinite (fuzz_node's finding). The entries that define the filter's guarantees, the pose
+      // block and each landmark's 2x2 block, are computed as downdate() will write them and checked
+      // first.  O(n K)
+      if (spd) spd = downdate_keeps_blocks_definite(n, ws);
       if (!spd) {
-        // The first block runs before any change: an S that is not positive definite there is the
-        // caller's (validate-then-mutate). Later, only rounding in P can cause it: skip the block.
+        // The first block runs before any change: a refusal there changes nothing (the caller's S,
+        // or a P that cannot take the update in T). Later blocks are skipped, PX4-style.
         if (b0 == 0) return Status::kNotPositiveDefinite;
         ++ws.rejected_blocks;
         continue;
@@ -422,15 +435,9 @@ class Slam {
         for (int t = 0; t < i; ++t) w[i] -= L[i][t] * w[t];
         w[i] /= L[i][i];
       }
-      for (int r = 0; r < n; ++r) {  // V <- A L^-T (per row), x <- x + V w;  <= kMaxState
+      for (int r = 0; r < n; ++r) {  // x <- x + V w;  <= kMaxState
         T dx = T(0);
-        for (int i = 0; i < k; ++i) {  // <= K
-          T v = V(r, i);
-          for (int t = 0; t < i; ++t) v -= L[i][t] * V(r, t);
-          v /= L[i][i];
-          V(r, i) = v;
-          dx += v * w[i];
-        }
+        for (int i = 0; i < k; ++i) dx += V(r, i) * w[i];  // <= K
         x_[r] += dx;
       }
       x_[2] = wrap_angle(x_[2]);
@@ -710,6 +717,33 @@ class Slam {
       }
       downdate_variance(pc[c], vc, ws);
     }
+  }
+  /// Entry (r, c), r <= c, of P - V V^T as downdate() computes it: the same fused chain, and for
+  /// a variance the same floor (without counting it).
+  T downdated(int r, int c, const SlamWorkspace<T, B>& ws) const {
+    constexpr int K = kUpdateBlockCols;
+    const T* vr = &ws.V[static_cast<std::size_t>(r) * K];
+    const T* vc = &ws.V[static_cast<std::size_t>(c) * K];
+    T s = cov(r, c);
+    for (int t = 0; t < K; ++t) s = fmadd(vr[t], -vc[t], s);  // <= K
+    if (r == c && !(s >= cov(r, c) * kMinVarianceRatio)) s = cov(r, c) * kMinVarianceRatio;
+    return s;
+  }
+  /// Whether P - V V^T keeps the pose block and every landmark's 2x2 block positive definite beyond
+  /// rounding (is_spd_scaled). Reads only.  O(n K)
+  bool downdate_keeps_blocks_definite(int n, const SlamWorkspace<T, B>& ws) const {
+    Mat3<T> Prr;
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r <= c; ++r) {
+        Prr(r, c) = downdated(r, c, ws);
+        Prr(c, r) = Prr(r, c);
+      }
+    }
+    if (!is_spd_scaled<T>(Prr)) return false;
+    for (int l = Layout::landmark(0); l + 1 < n; l += 2) {  // <= kMaxLandmarks
+      if (!is_spd_scaled<T>(downdated(l, l, ws), downdated(l, l + 1, ws), downdated(l + 1, l + 1, ws))) return false;
+    }
+    return true;
   }
   /// a * b + c rounded once: std::fma, which GCC lowers to VFMA.F32 on the M4F (checked in the
   /// cross build's disassembly: no libcall) and the host's fmaf; both correctly rounded.
