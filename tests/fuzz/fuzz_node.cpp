@@ -214,8 +214,12 @@ struct Session {
         const proto::Stats before = node.stats();
         node.on_bytes(p + i, 1);
         const proto::Stats now = node.stats();
-        // One byte ends at most one frame.
-        require(framing_events(now) <= framing_events(before) + (p[i] == proto::kDelimiter ? 1 : 0));
+        // One byte ends at most one frame: a delimiter, or the byte that overflows the decoder's
+        // buffer (an overrun, counted there once; its frame's remaining bytes are discarded up to
+        // the next delimiter, docs/protocol.md). Any other byte counts nothing.
+        const std::uint64_t events = framing_events(now) - framing_events(before);
+        require(events <= 1);
+        if (p[i] != proto::kDelimiter) require(events == std::uint64_t{now.overrun} - before.overrun);
         check(before);
       }
     } else {
