@@ -573,3 +573,28 @@ TEST_CASE_TEMPLATE("update: a downdate that rounding would leave indefinite is r
   CHECK(taken > 0);
   if (std::is_same<T, float>::value) CHECK(refused > 0);  // float cannot take the largest of these
 }
+
+// Found by tests/fuzz/fuzz_associate: a finite range near the scalar's max paired with a landmark
+// gives a finite innovation, but L^-1 nu overflows and update() returned kOk with a mean of Inf and
+// NaN. The new mean is now checked before anything is written.
+TEST_CASE_TEMPLATE("update: an innovation that would overflow the mean is refused, nothing changed", T, float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  FeatureId id = 0;
+  REQUIRE(f->slam.add_known_landmark(Vec2<T>(T(3), T(0.4)), R, id) == Status::kOk);
+  f->obs.clear();
+  REQUIRE(f->obs.push(Vec2<T>(std::numeric_limits<T>::max() / T(4), T(0.1)), R) == Status::kOk);
+  f->assoc.count = 1;
+  f->assoc.feature[0] = id;
+  std::vector<unsigned char> before(sizeof(f->slam));  // bytes, padding included
+  std::memcpy(before.data(), static_cast<const void*>(&f->slam), sizeof(f->slam));
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kNonFinite);
+  CHECK(std::memcmp(static_cast<const void*>(&f->slam), before.data(), sizeof(f->slam)) == 0);
+  // A sane observation of the same landmark is then taken.
+  f->obs.clear();
+  REQUIRE(f->obs.push(observe(f->slam.pose(), f->slam.landmark(0)), R) == Status::kOk);
+  CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kOk);
+  for (int i = 0; i < f->slam.dim(); ++i) CHECK(std::isfinite(f->slam.x(i)));
+}

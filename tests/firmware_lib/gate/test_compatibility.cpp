@@ -1,6 +1,10 @@
-// Individual gate and local region: the gate boundary, bearing wrap across +-pi, eq. 5's strict <.
+// Individual gate and local region: the gate boundary, bearing wrap across +-pi, eq. 5's strict <;
+// an S that is not positive definite gates nothing.
 #include <doctest/doctest.h>
 
+#include <limits>
+
+#include "geojcbb/gate/compatibility.hpp"
 #include "support/helpers.hpp"
 
 using namespace geojcbb;
@@ -154,4 +158,32 @@ TEST_CASE_TEMPLATE("decline: an observation between two features is left unmatch
     CHECK(p->out.feature[0] == 100);
     CHECK(p->out.diag.declined == 0);
   }
+}
+
+// Found by tests/fuzz/fuzz_node: C's blocks are checked positive semidefinite only within rounding,
+// so C + R is indefinite for a tiny R; the closed-form d2 was then negative and passed the gate, and
+// the device's ASSOC_RESULT (d2 must be >= 0 or +inf) could not be encoded. A pair whose S is not
+// positive definite is now incompatible, and d2 is never negative.
+TEST_CASE_TEMPLATE("an S that rounding left indefinite gates nothing; d2 is never negative", T, float, double) {
+  const T eps = std::numeric_limits<T>::epsilon();
+  Mat2<T> S;
+  S << T(1), T(1) + T(100) * eps, T(1) + T(100) * eps, T(1);
+  CHECK(mahalanobis2(Vec2<T>(T(1), T(-1)), S) == std::numeric_limits<T>::infinity());
+  S << T(1), T(0), T(0), T(-1);
+  CHECK(mahalanobis2(Vec2<T>(T(0.1), T(0.1)), S) == std::numeric_limits<T>::infinity());
+  S << T(1), T(0.5), T(0.5), T(1);
+  CHECK(mahalanobis2(Vec2<T>(T(0), T(0)), S) == T(0));
+  CHECK(mahalanobis2(Vec2<T>(T(1), T(0)), S) == doctest::Approx(T(4) / T(3)));
+
+  auto p = make_problem<T, DefaultBounds>();
+  one_obs<T, DefaultBounds>(*p, Vec2<T>(T(6), T(-0.5)), {Vec2<T>(T(5), T(0.5))});
+  // C's block is PSD within rounding (det = -200 eps, inside is_psd's 1024 eps), R = eps I.
+  Mat2<T> C;
+  C << T(1), T(1) + T(100) * eps, T(1) + T(100) * eps, T(1);
+  p->pred.C.set_block(0, 0, C);
+  p->obs.R[0] = Mat2<T>::Identity() * eps;
+  auto cfg = make_config<T, DefaultBounds>(SearchMethod::kJcbb, false, false);
+  REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+  CHECK(p->out.feature[0] != 100);
+  CHECK(!(p->out.d2[0] < T(0)));
 }

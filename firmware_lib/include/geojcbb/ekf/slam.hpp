@@ -63,8 +63,9 @@ struct SlamWorkspace {
   std::array<std::int16_t, B::kMaxObservations> lm;   ///< pair -> landmark
   std::array<Mat23<T>, B::kMaxObservations> Hp;       ///< pair -> dh/dpose
   std::array<Mat2<T>, B::kMaxObservations> Hl;        ///< pair -> dh/dlandmark
-  /// Diagnostics of the last update(): blocks after the first whose S rounding left not positive
-  /// definite (their fusion skipped, PX4-style), and variances floored (kMinVarianceRatio).
+  /// Diagnostics of the last update(): blocks after the first whose S, or whose resulting pose or
+  /// landmark blocks, rounding left not positive definite, or whose mean would overflow (their
+  /// fusion skipped, PX4-style), and variances floored (kMinVarianceRatio).
   int rejected_blocks = 0;
   int floored_variances = 0;
   std::array<std::uint16_t, B::kMaxCandidates> cand;  ///< local map: candidate -> landmark
@@ -312,7 +313,10 @@ class Slam {
   /// One batch update with every paired observation of `assoc` (feature ids are landmark ids).
   /// @return kOk (also with no pairs); kInvalidInput for a count mismatch or an unknown landmark;
   ///         kNonFinite / kNotPositiveDefinite for bad observations or an S that is not positive
-  ///         definite. No state changes unless kOk.
+  ///         definite; kNotPositiveDefinite also when the covariance that would result has a pose or
+  ///         landmark block that rounding left not positive definite, kNonFinite when the mean would
+  ///         overflow. No state changes unless kOk. Blocks of pairs after the first that meet any of
+  ///         these are skipped (SlamWorkspace::rejected_blocks).
   [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws) {
     if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
       return Status::kInvalidInput;
@@ -419,10 +423,22 @@ class Slam {
       // block and each landmark's 2x2 block, are computed as downdate() will write them and checked
       // first.  O(n K)
       if (spd) spd = downdate_keeps_blocks_definite(n, ws);
-      if (!spd) {
+      for (int i = 0; i < k && spd; ++i) {  // w <- L^-1 nu_b;  <= K
+        for (int t = 0; t < i; ++t) w[i] -= L[i][t] * w[t];
+        w[i] /= L[i][i];
+      }
+      // The new mean must be finite too: a finite innovation over a tiny S can overflow x + V w
+      // (fuzz_associate's finding). Checked with the arithmetic that writes it, before any write.
+      bool finite = true;
+      for (int r = 0; r < n && spd && finite; ++r) {  // <= kMaxState
+        T dx = T(0);
+        for (int i = 0; i < k; ++i) dx += V(r, i) * w[i];  // <= K
+        finite = std::isfinite(x_[r] + dx);
+      }
+      if (!spd || !finite) {
         // The first block runs before any change: a refusal there changes nothing (the caller's S,
         // or a P that cannot take the update in T). Later blocks are skipped, PX4-style.
-        if (b0 == 0) return Status::kNotPositiveDefinite;
+        if (b0 == 0) return spd ? Status::kNonFinite : Status::kNotPositiveDefinite;
         ++ws.rejected_blocks;
         continue;
       }
@@ -430,10 +446,6 @@ class Slam {
         prior_[0] = x_[0];
         prior_[1] = x_[1];
         updated_ = true;
-      }
-      for (int i = 0; i < k; ++i) {  // w <- L^-1 nu_b;  <= K
-        for (int t = 0; t < i; ++t) w[i] -= L[i][t] * w[t];
-        w[i] /= L[i][i];
       }
       for (int r = 0; r < n; ++r) {  // x <- x + V w;  <= kMaxState
         T dx = T(0);

@@ -19,11 +19,17 @@
 
 namespace geojcbb {
 
-/// d2 = nu^T S^-1 nu for a 2x2 symmetric positive definite S (closed form).
+/// d2 = nu^T S^-1 nu for a 2x2 symmetric S (closed form), never negative: +inf when S is not
+/// positive definite, so that such a pair fails every gate, and 0 where rounding takes the form of
+/// a nearly singular S below 0. (C's blocks are only checked positive semidefinite within rounding,
+/// so C + R can be indefinite for a tiny R; the quotient was then negative and passed the gate:
+/// fuzz_node's finding, an ASSOC_RESULT with d2 = -4154 that the device could not encode.)
 template <typename T>
 T mahalanobis2(const Vec2<T>& nu, const Mat2<T>& S) {
   const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-  return (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
+  if (!(det > T(0)) || !(S(0, 0) > T(0))) return std::numeric_limits<T>::infinity();
+  const T d2 = (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
+  return d2 < T(0) ? T(0) : d2;  // NaN stays NaN: no gate passes it
 }
 
 /// The local association region (2019 paper, eq. 5): predicted range < r + d, or everything when the
