@@ -598,3 +598,42 @@ TEST_CASE_TEMPLATE("update: an innovation that would overflow the mean is refuse
   CHECK(f->slam.update(f->obs, f->assoc, f->ws) == Status::kOk);
   for (int i = 0; i < f->slam.dim(); ++i) CHECK(std::isfinite(f->slam.x(i)));
 }
+
+// Found by tests/fuzz/fuzz_associate: augment with a range variance near 1e123 (double) gave a new
+// block so elongated that it is singular in T, yet its raw determinant rounded positive and it was
+// accepted. The new block is now tested on its correlation (is_spd_scaled), as the pose block is.
+TEST_CASE_TEMPLATE("augment and add_known_landmark: a new block singular in T is refused, nothing changed", T, float,
+                   double) {
+  const double top = std::is_same<T, float>::value ? 1e36 : 1e300;
+  int refused = 0;
+  for (double var = 1e-2; var <= top; var *= 1e4) {  // <= 76 steps
+    CAPTURE(var);
+    auto s = std::make_unique<Slam<T, EB>>();
+    REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+    Mat2<T> R;
+    R << T(var), T(0), T(0), T(3e-4);
+    std::vector<unsigned char> before(sizeof(*s));  // bytes, padding included
+    std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+    FeatureId id = 77;
+    const Status st = s->augment(Vec2<T>(T(1.75), T(-0.9)), R, id);
+    Mat2<T> Pll;  // the same block, surveyed
+    Pll << T(var), T(var) * T(0.999999), T(var) * T(0.999999), T(var);
+    FeatureId id2 = 78;
+    auto t = std::make_unique<Slam<T, EB>>(*s);
+    const Status st2 = t->add_known_landmark(Vec2<T>(T(1), T(1)), Pll, id2);
+    auto check_one = [&refused](const Slam<T, EB>& slam, Status status, FeatureId got, FeatureId untouched) {
+      if (status == Status::kOk) {
+        const int l = Layout::landmark(slam.landmarks() - 1);
+        CHECK(is_spd_scaled(slam.cov(l, l), slam.cov(l, l + 1), slam.cov(l + 1, l + 1)));
+      } else {
+        CHECK((status == Status::kNotPositiveDefinite || status == Status::kNonFinite));
+        CHECK(got == untouched);
+        ++refused;
+      }
+    };
+    check_one(*s, st, id, 77);
+    check_one(*t, st2, id2, 78);
+    if (st != Status::kOk) CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+  }
+  CHECK(refused > 0);
+}

@@ -479,8 +479,10 @@ class Slam {
     // covariance before writing any of them.
     const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // R at rounding's edge
-    for (int c = 0; c < n; ++c) {                                           // <= kMaxState
+    // R at rounding's edge, or a block so elongated that it is singular in T (double, R near 1e123:
+    // the raw determinant rounds positive; fuzz_associate's finding): tested scale-free.
+    if (!spd_block(symmetric_part(Pll))) return Status::kNotPositiveDefinite;
+    for (int c = 0; c < n; ++c) {  // <= kMaxState
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
         for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
@@ -508,8 +510,7 @@ class Slam {
   ///         unless kOk.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // R at rounding's edge
-    if (!is_spd(Pll)) return Status::kNotPositiveDefinite;
+    if (!is_spd(Pll) || !spd_block(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // as augment()
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
     for (int c = 0; c < k; ++c) {  // <= kMaxState
@@ -730,6 +731,7 @@ class Slam {
       downdate_variance(pc[c], vc, ws);
     }
   }
+  static bool spd_block(const Mat2<T>& m) { return is_spd_scaled<T>(m(0, 0), m(0, 1), m(1, 1)); }
   /// Entry (r, c), r <= c, of P - V V^T as downdate() computes it: the same fused chain, and for
   /// a variance the same floor (without counting it).
   T downdated(int r, int c, const SlamWorkspace<T, B>& ws) const {
