@@ -481,7 +481,8 @@ class Slam {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
     // R at rounding's edge, or a block so elongated that it is singular in T (double, R near 1e123:
     // the raw determinant rounds positive; fuzz_associate's finding): tested scale-free.
-    if (!spd_block(symmetric_part(Pll))) return Status::kNotPositiveDefinite;
+    const Mat2<T> Pll_sym = symmetric_part(Pll);
+    if (!spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
     for (int c = 0; c < n; ++c) {  // <= kMaxState
       for (int u = 0; u < 2; ++u) {
         T s = T(0);
@@ -496,7 +497,7 @@ class Slam {
         P(c, k + u) = s;
       }
     }
-    set_sym<2>(k, symmetric_part(Pll));
+    set_sym<2>(k, Pll_sym);
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
@@ -510,13 +511,14 @@ class Slam {
   ///         unless kOk.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!is_spd(Pll) || !spd_block(symmetric_part(Pll))) return Status::kNotPositiveDefinite;  // as augment()
+    const Mat2<T> Pll_sym = symmetric_part(Pll);
+    if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;  // as augment()
     if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
     const int k = dim();
     for (int c = 0; c < k; ++c) {  // <= kMaxState
       for (int u = 0; u < 2; ++u) P(c, k + u) = T(0);
     }
-    set_sym<2>(k, symmetric_part(Pll));
+    set_sym<2>(k, Pll_sym);
     add_bookkeeping(l);
     id = next_id_++;
     ++n_;
