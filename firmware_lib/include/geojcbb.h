@@ -11,6 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geojcbb/core/options.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -32,7 +34,7 @@ extern "C" {
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
 #define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28384
-#define GEOJCBB_SLAM_STORAGE_SIZE 115520
+#define GEOJCBB_SLAM_STORAGE_SIZE 115552
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */
@@ -69,22 +71,24 @@ typedef enum geojcbb_strategy {
   GEOJCBB_STRATEGY_PCJCBB = 6 /* GEOJCBB + pairwise verify and pose-free seed (docs/consistency.md) */
 } geojcbb_strategy;
 
-/* Mirrors geojcbb::StrategyParams<float>; geojcbb_strategy_params_default() fills the defaults. */
-typedef struct geojcbb_strategy_params {
-  double confidence;           /* chi-square level of the individual and joint tests (0.99) */
-  float local_radius_m;        /* r + d [m] (eq. 5); > 0 for GEMJCBB and GEOJCBB */
-  int groups;                  /* K for k-means and GMM-EM (3); 0: BIC (EM) */
-  float dbscan_eps_m;          /* DBSCAN radius [m] (1.5) */
-  int dbscan_min_points;       /* (2) */
-  int joint_recheck;           /* bool (1) */
-  int condition_groups;        /* bool (0) */
-  uint32_t node_budget;        /* 0: GEOJCBB_MAX_JCBB_NODES */
-  double ambiguity_margin;     /* 0: off */
-  int new_if_candidates_taken; /* bool (0) */
-  int verify;                  /* bool (0): pairwise verification in any preset (PCJCBB: always) */
-} geojcbb_strategy_params;
+/* The settings of one SLAM step (association and filter): one member per line of the option table
+ * (geojcbb/core/options.h: type, default, range, meaning), generated from it, as is the C++
+ * geojcbb::StepSettings<float>. geojcbb_settings_default() fills the table's defaults. Types: REAL and
+ * F32 are float, F64 double, INT int, U32 uint32_t, BOOL int (0 or 1). */
+#define GEOJCBB_C_TYPE_STRATEGY geojcbb_strategy
+#define GEOJCBB_C_TYPE_F64 double
+#define GEOJCBB_C_TYPE_REAL float
+#define GEOJCBB_C_TYPE_F32 float
+#define GEOJCBB_C_TYPE_INT int
+#define GEOJCBB_C_TYPE_U32 uint32_t
+#define GEOJCBB_C_TYPE_BOOL int
+#define GEOJCBB_C_MEMBER(TYPE, name, def, range, unit, cli, doc) GEOJCBB_C_TYPE_##TYPE name;
+typedef struct geojcbb_settings {
+  GEOJCBB_OPTIONS(GEOJCBB_C_MEMBER)
+} geojcbb_settings;
+#undef GEOJCBB_C_MEMBER
 
-void geojcbb_strategy_params_default(geojcbb_strategy_params* p);
+void geojcbb_settings_default(geojcbb_settings* s);
 
 /* Mirrors geojcbb::AssociationDiagnostics. */
 typedef struct geojcbb_diagnostics {
@@ -116,11 +120,11 @@ typedef struct geojcbb_association {
 /* ---- Association ---- */
 typedef struct geojcbb_associator geojcbb_associator; /* opaque: lives in the caller's storage */
 
-/* Places an associator configured with a strategy in `storage` (size bytes, GEOJCBB_STORAGE_ALIGN
- * aligned). @return OK; INVALID_INPUT for null pointers, a small or misaligned buffer, or bad
+/* Places an associator configured with settings->strategy and the settings' association options
+ * in `storage` (size bytes, GEOJCBB_STORAGE_ALIGN aligned). @return OK; INVALID_INPUT for null pointers, a small or misaligned buffer, or bad
  * parameters; the statuses of make_strategy. *out is set only on OK. */
-geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strategy strategy,
-                                       const geojcbb_strategy_params* params, geojcbb_associator** out);
+geojcbb_status geojcbb_associator_init(void* storage, size_t size, const geojcbb_settings* settings,
+                                       geojcbb_associator** out);
 
 /* One association call.
  *   m   observations: z[2m] = (range [m], bearing [rad]) pairs, R[4m] = 2x2 row-major [m^2, rad^2]
@@ -133,21 +137,6 @@ geojcbb_status geojcbb_associate(geojcbb_associator* handle, int m, const float*
 
 /* ---- EKF-SLAM step (geojcbb::node::SlamStep<float, DefaultBounds>) ---- */
 typedef struct geojcbb_slam geojcbb_slam; /* opaque: lives in the caller's storage */
-
-/* Mirrors node::StepSettings<float>; geojcbb_slam_settings_default() fills the defaults. */
-typedef struct geojcbb_slam_settings {
-  geojcbb_strategy strategy;      /* (GEOJCBB) */
-  geojcbb_strategy_params params; /* params.local_radius_m must be > 0 */
-  double new_landmark_level;      /* chi-square level of the augmentation gate (0.999) */
-  float min_range_m, max_range_m; /* where a mapped landmark is expected to be seen */
-  float half_fov_rad;
-  int confirm_hits, max_misses, max_tentative_reviews; /* landmark life cycle (ekf::LandmarkPolicy) */
-  float miss_probability, static_gate_d2;
-  int first_estimates_jacobians; /* bool (1) */
-  int augment;                   /* bool (1): add new landmarks */
-} geojcbb_slam_settings;
-
-void geojcbb_slam_settings_default(geojcbb_slam_settings* s);
 
 /* Mirrors node::Outcome. */
 typedef enum geojcbb_outcome {
@@ -169,7 +158,7 @@ typedef struct geojcbb_step_result {
 /* Places an unconfigured SLAM step in `storage`. @return OK; INVALID_INPUT for bad storage. */
 geojcbb_status geojcbb_slam_init(void* storage, size_t size, geojcbb_slam** out);
 /* @return OK; INVALID_INPUT for bad settings; the statuses of make_strategy. */
-geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* settings);
+geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_settings* settings);
 /* Clears the map. x0 = (x [m], y [m], theta [rad]); P0 3x3 row-major. */
 geojcbb_status geojcbb_slam_reset(geojcbb_slam* handle, const float x0[3], const float P0[9]);
 /* One odometry interval: v [m/s], w [rad/s], dt [s] >= 0, their standard deviations (> 0). */

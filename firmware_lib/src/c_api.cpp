@@ -6,6 +6,7 @@
 #include <cstring>
 #include <new>
 
+#include "geojcbb/c_settings.hpp"
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb/pipeline_f32.hpp"
 
@@ -86,22 +87,6 @@ bool storage_ok(const void* p, std::size_t size, std::size_t need) {
   return p != nullptr && size >= need && reinterpret_cast<std::uintptr_t>(p) % GEOJCBB_STORAGE_ALIGN == 0;
 }
 
-StrategyParams<float> to_params(const geojcbb_strategy_params& p) {
-  StrategyParams<float> q;
-  q.confidence = p.confidence;
-  q.local_radius_m = p.local_radius_m;
-  q.groups = p.groups;
-  q.dbscan_eps_m = p.dbscan_eps_m;
-  q.dbscan_min_points = p.dbscan_min_points;
-  q.joint_recheck = p.joint_recheck != 0;
-  q.condition_groups = p.condition_groups != 0;
-  q.node_budget = p.node_budget;
-  q.ambiguity_margin = p.ambiguity_margin;
-  q.new_if_candidates_taken = p.new_if_candidates_taken != 0;
-  q.verify = p.verify != 0;
-  return q;
-}
-
 bool strategy_ok(int s) { return s >= 0 && s < kStrategyCount; }
 
 geojcbb_diagnostics to_c(const AssociationDiagnostics& d) {
@@ -150,30 +135,18 @@ extern "C" {
 
 const char* geojcbb_status_name(geojcbb_status s) { return to_string(static_cast<Status>(s)); }
 
-void geojcbb_strategy_params_default(geojcbb_strategy_params* p) {
-  if (p == nullptr) return;
-  const StrategyParams<float> d;
-  p->confidence = d.confidence;
-  p->local_radius_m = d.local_radius_m;
-  p->groups = d.groups;
-  p->dbscan_eps_m = d.dbscan_eps_m;
-  p->dbscan_min_points = d.dbscan_min_points;
-  p->joint_recheck = d.joint_recheck ? 1 : 0;
-  p->condition_groups = d.condition_groups ? 1 : 0;
-  p->node_budget = d.node_budget;
-  p->ambiguity_margin = d.ambiguity_margin;
-  p->new_if_candidates_taken = d.new_if_candidates_taken ? 1 : 0;
-  p->verify = d.verify ? 1 : 0;
+void geojcbb_settings_default(geojcbb_settings* s) {
+  if (s != nullptr) *s = c_boundary::to_c(StepSettings<float>{});
 }
 
-geojcbb_status geojcbb_associator_init(void* storage, size_t size, geojcbb_strategy strategy,
-                                       const geojcbb_strategy_params* params, geojcbb_associator** out) {
-  if (!storage_ok(storage, size, sizeof(Associator)) || params == nullptr || out == nullptr ||
-      !strategy_ok(static_cast<int>(strategy))) {
+geojcbb_status geojcbb_associator_init(void* storage, size_t size, const geojcbb_settings* settings,
+                                       geojcbb_associator** out) {
+  if (!storage_ok(storage, size, sizeof(Associator)) || settings == nullptr || out == nullptr ||
+      !strategy_ok(static_cast<int>(settings->strategy))) {
     return GEOJCBB_INVALID_INPUT;
   }
   AssociationConfigF cfg;
-  const Status s = make_strategy(static_cast<Strategy>(strategy), to_params(*params), cfg);
+  const Status s = make_strategy(static_cast<Strategy>(settings->strategy), c_boundary::from_c(*settings), cfg);
   if (s != Status::kOk) return c_status(s);
   Associator* a = new (storage) Associator();
   a->cfg = cfg;
@@ -217,24 +190,6 @@ geojcbb_status geojcbb_associate(geojcbb_associator* handle, int m, const float*
   return GEOJCBB_OK;
 }
 
-void geojcbb_slam_settings_default(geojcbb_slam_settings* s) {
-  if (s == nullptr) return;
-  const node::StepSettings<float> d;
-  s->strategy = static_cast<geojcbb_strategy>(d.strategy);
-  geojcbb_strategy_params_default(&s->params);
-  s->new_landmark_level = d.new_landmark_level;
-  s->min_range_m = d.view.min_range_m;
-  s->max_range_m = d.view.max_range_m;
-  s->half_fov_rad = d.view.half_fov_rad;
-  s->confirm_hits = d.policy.confirm_hits;
-  s->max_misses = d.policy.max_misses;
-  s->max_tentative_reviews = d.policy.max_tentative_reviews;
-  s->miss_probability = d.policy.miss_probability;
-  s->static_gate_d2 = d.policy.static_gate_d2;
-  s->first_estimates_jacobians = d.filter.first_estimates_jacobians ? 1 : 0;
-  s->augment = d.augment ? 1 : 0;
-}
-
 geojcbb_status geojcbb_slam_init(void* storage, size_t size, geojcbb_slam** out) {
   if (!storage_ok(storage, size, sizeof(Slam)) || out == nullptr) return GEOJCBB_INVALID_INPUT;
   *out = reinterpret_cast<geojcbb_slam*>(new (storage) Slam());
@@ -246,25 +201,12 @@ static Slam* slam_of(geojcbb_slam* handle) {
   return s != nullptr && s->magic == kSlamMagic ? s : nullptr;
 }
 
-geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_slam_settings* settings) {
+geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_settings* settings) {
   Slam* s = slam_of(handle);
   if (s == nullptr || settings == nullptr || !strategy_ok(static_cast<int>(settings->strategy)))
     return GEOJCBB_INVALID_INPUT;
   node::StepSettings<float>& st = s->settings;
-  st = node::StepSettings<float>{};
-  st.strategy = static_cast<Strategy>(settings->strategy);
-  st.params = to_params(settings->params);
-  st.new_landmark_level = settings->new_landmark_level;
-  st.view.min_range_m = settings->min_range_m;
-  st.view.max_range_m = settings->max_range_m;
-  st.view.half_fov_rad = settings->half_fov_rad;
-  st.policy.confirm_hits = settings->confirm_hits;
-  st.policy.max_misses = settings->max_misses;
-  st.policy.max_tentative_reviews = settings->max_tentative_reviews;
-  st.policy.miss_probability = settings->miss_probability;
-  st.policy.static_gate_d2 = settings->static_gate_d2;
-  st.filter.first_estimates_jacobians = settings->first_estimates_jacobians != 0;
-  st.augment = settings->augment != 0;
+  st = c_boundary::from_c(*settings);
   return c_status(s->step.configure(st));
 }
 

@@ -41,7 +41,7 @@ struct Messages {
 
 Messages messages(RecordedSource& src, const RunOptions& o, int max_obs) {
   Messages m;
-  m.config = link_config(src.sensor, o.strategy, o);
+  m.config = link_config(src.sensor, o);
   m.reset = link_reset(src.x0, src.P0);
   std::vector<int> kept;
   for (const RunInput& in : src.inputs()) {
@@ -150,10 +150,10 @@ int run(int argc, char** argv) {
     for (int w : windows) std::printf("   link w=%-2d scans/s (ratio)", w);
     std::printf("\n");
     int status = 0;
-    for (const Strategy strategy : select_strategies(names)) {
-      const std::string name = to_string(strategy);
+    for (const Method& method : select_methods(names, false)) {
+      const std::string name = method.name();
       RunOptions o;
-      o.strategy = strategy;
+      method.apply(o);
       std::vector<Messages> msgs;
       msgs.reserve(sources.size());
       for (RecordedSource& s : sources) msgs.push_back(messages(s, o, max_obs));

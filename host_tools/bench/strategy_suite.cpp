@@ -47,7 +47,7 @@ struct Problem {
 
 int run_strategy_suite(const BenchOptions& o) {
   constexpr double kSensorRange = 10.0, kCompensation = 2.0;
-  StrategyParams<double> sp;
+  StepSettings<double> sp;
   sp.confidence = o.confidence;
   sp.local_radius_m = kSensorRange + kCompensation;
   sp.groups = 3;

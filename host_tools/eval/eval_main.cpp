@@ -38,6 +38,7 @@
 #include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/report.hpp"
+#include "geojcbb_host/run_cli.hpp"
 #include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/slam_run.hpp"
 #include "geojcbb_host/stream.hpp"
@@ -87,70 +88,8 @@ struct SimOptions {
   std::string device_info;  ///< the device the runs were streamed to (empty: in process)
 };
 
-// The filter's and the association's robustness switches, the same for sim and mrclam
-// (docs/mrclam.md measures each alone).
-void add_robustness_options(CLI::App& app, RunOptions& run) {
-  app.add_flag("!--no-fej", run.filter.first_estimates_jacobians,
-               "standard EKF Jacobians instead of first-estimates Jacobians");
-  app.add_option("--ambiguity-margin", run.ambiguity_margin,
-                 "decline: pairings that a runner-up hypothesis (as many pairings, joint d2 within this margin) "
-                 "makes differently are left unmatched (0: off)")
-      ->default_val(run.ambiguity_margin)
-      ->check(CLI::Range(0.0, 1e5));
-  app.add_option("--miss-probability", run.landmark_policy.miss_probability,
-                 "remove a landmark (confirmed too) missed in view so often in a row that a static one seen at its "
-                 "rate would be missed so with less than this probability (0: off)")
-      ->default_val(run.landmark_policy.miss_probability)
-      ->check(CLI::Range(0.0, 0.5));
-  app.add_option("--occlusion", run.occlusion_rad,
-                 "a landmark with a nearer one within this bearing [rad] is hidden, so not expected (0: off)")
-      ->default_val(run.occlusion_rad)
-      ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--static-gate-level", run.static_gate_level,
-                 "remove a landmark whose estimate leaves, at this chi-square level, the region it was added in "
-                 "(an object that moves; 0: off)")
-      ->default_val(run.static_gate_level)
-      ->check(CLI::Range(0.0, 0.999999));
-  app.add_flag("--verify", run.verify,
-               "every strategy's answer is verified pairwise (pose-free consistency, docs/consistency.md); a single "
-               "strategy can be verified by naming it with +V, e.g. JCBB+V");
-  app.add_option("--seed-min-var", run.seed_min_position_var_m2,
-                 "PCJCBB: seed with the pose-free clique when the best-placed candidate's position variance is at "
-                 "least this [m^2]")
-      ->default_val(run.seed_min_position_var_m2)
-      ->check(CLI::Range(1e-6, 1e9));
-  app.add_flag("--new-if-taken,!--no-new-if-taken", run.new_if_candidates_taken,
-               "with mutual exclusion, an observation whose compatible features are all taken by others is new, "
-               "not unmatched");
-}
-
-std::vector<Method> parse_strategies(const std::vector<std::string>& names, bool oracle) {
-  std::vector<Method> out;
-  if (names.empty()) {
-    for (int k = 0; k < kStrategyCount; ++k) out.push_back({static_cast<Strategy>(k), false});
-  }
-  for (const std::string& n : names) {
-    bool found = false;
-    for (int k = 0; k < kStrategyCount && !found; ++k) {
-      for (bool verify : {false, true}) {
-        const Method m{static_cast<Strategy>(k), false, verify};
-        std::string a = m.name(), b = n;
-        std::transform(a.begin(), a.end(), a.begin(), ::tolower);
-        std::transform(b.begin(), b.end(), b.begin(), ::tolower);
-        if (a == b && !found) {
-          out.push_back(m);
-          found = true;
-        }
-      }
-    }
-    if (!found) throw std::runtime_error("unknown strategy '" + n + "'");
-  }
-  if (oracle) out.push_back({Strategy::kJcbb, true});
-  return out;
-}
-
 int run_sim(const SimOptions& o) {
-  const std::vector<Method> strategies = parse_strategies(o.strategies, o.oracle);
+  const std::vector<Method> strategies = select_methods(o.strategies, true, o.oracle);
   std::vector<Scenario> scenarios;
   for (const std::string& p : o.scenarios) scenarios.push_back(load_scenario(p));
   fs::create_directories(o.out_dir);
@@ -361,7 +300,7 @@ int run_replay(const ReplayOptions& o) {
     if (positions.empty()) throw std::runtime_error("--known-map needs the landmark positions (landmark lines)");
     base.known_map = positions;
   }
-  const std::vector<Method> strategies = parse_strategies(o.strategies, o.oracle);
+  const std::vector<Method> strategies = select_methods(o.strategies, true, o.oracle);
   fs::create_directories(o.out_dir);
   int scans = 0, predictions = 0, with_truth = 0;
   for (const RunInput& in : source.inputs()) {
@@ -610,39 +549,13 @@ int run(int argc, char** argv) {
       ->default_val(so.out_dir);
   sim->add_flag("!--no-svg", so.svg, "do not write the figures");
   sim->add_flag("!--no-progress", so.progress, "no progress bar on stderr");
-  sim->add_option("--confidence", so.run.confidence, "chi-square level of the individual and joint gates")
-      ->default_val(0.99)
-      ->check(CLI::Range(0.5, 0.999999));
-  sim->add_option("--new-landmark-gate", so.run.new_landmark_gate,
-                  "chi-square level of the second gate an unpaired observation "
-                  "must pass to become a landmark")
-      ->default_val(0.999)
-      ->check(CLI::Range(0.5, 0.999999));
-  sim->add_option("--compensation", so.run.compensation_m,
-                  "d in the local region r + d [m] (r: the scenario's max range)")
-      ->default_val(5.0)
-      ->check(CLI::Range(0.0, 1000.0));
-  sim->add_option("--groups", so.run.groups, "K for KJCBB and GEMJCBB/GEOJCBB (0: GMM chooses K by BIC)")
-      ->default_val(3)
-      ->check(CLI::Range(0, 8));
-  sim->add_flag("--condition-groups", so.run.condition_groups,
-                "each group's JCBB starts from the earlier groups' pairings "
-                "(our addition)");
   sim->add_flag("--truth", so.oracle,
                 "add a row TRUTH: association by ground truth (gated at chi2(0.999, 2)), the filter's own accuracy "
                 "with perfect association");
   sim->add_option("--max-steps", so.run.max_steps,
                   "stop each run after this many control intervals (0: the whole path)")
       ->default_val(0);
-  sim->add_option("--confirm-hits", so.run.landmark_policy.confirm_hits,
-                  "pairings that confirm a tentative landmark (the first "
-                  "sighting counts)")
-      ->default_val(2)
-      ->check(CLI::Range(1, 255));
-  sim->add_option("--max-misses", so.run.landmark_policy.max_misses, "misses in view that remove a tentative landmark")
-      ->default_val(2)
-      ->check(CLI::Range(1, 255));
-  add_robustness_options(*sim, so.run);
+  add_run_options(*sim, so.run);
   LinkCli sim_link;
   add_link_options(*sim, sim_link,
                    "stream every run to the device on this serial port or pty instead of running it in process",
@@ -664,12 +577,6 @@ int run(int argc, char** argv) {
   mr->add_option("--strategies", mo_strategies, "strategies, comma separated (default all)")->delimiter(',');
   mr->add_option("--out-dir", mo_out, "directory for mrclam.csv and mrclam.json")->default_val(mo_out);
   mr->add_flag("!--no-progress", mo_progress, "no progress bar on stderr");
-  mr->add_option("--confidence", mo.run.confidence, "chi-square level of the gates")
-      ->default_val(mo.run.confidence)
-      ->check(CLI::Range(0.5, 0.999999));
-  mr->add_option("--new-landmark-gate", mo.run.new_landmark_gate, "chi-square level of the augmentation gate")
-      ->default_val(mo.run.new_landmark_gate)
-      ->check(CLI::Range(0.5, 0.999999));
   mr->add_option("--sigma-range", mo.sigma_range_m,
                  "range noise for R [m] (default: from the data, see docs/mrclam.md)");
   mr->add_option("--sigma-bearing", mo.sigma_bearing_rad, "bearing noise for R [rad] (default: from the data)");
@@ -713,7 +620,7 @@ int run(int argc, char** argv) {
                  "window over which the drive's scale and noise are fitted [s]")
       ->default_val(mo.calibration_options.fit_window_s)
       ->check(CLI::Range(0.1, 30.0));
-  add_robustness_options(*mr, mo.run);
+  add_run_options(*mr, mo.run);
   LinkCli mr_link;
   add_link_options(*mr, mr_link,
                    "stream every replay to the device on this serial port or pty instead of running it in process",
@@ -749,19 +656,10 @@ int run(int argc, char** argv) {
   rp->add_flag("--mrclam-rules", rp_mrclam_rules,
                "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "
                "0.03 rad) where not given");
-  rp->add_option("--confidence", ro.run.confidence, "chi-square level of the individual and joint gates")
-      ->default_val(0.99)
-      ->check(CLI::Range(0.5, 0.999999));
-  rp->add_option("--new-landmark-gate", ro.run.new_landmark_gate, "chi-square level of the augmentation gate")
-      ->default_val(0.999)
-      ->check(CLI::Range(0.5, 0.999999));
-  rp->add_option("--compensation", ro.run.compensation_m, "d in the local region r + d [m]")
-      ->default_val(5.0)
-      ->check(CLI::Range(0.0, 1000.0));
   rp->add_option("--jobs", ro.jobs, "worker threads (default: the number of cores)")->check(CLI::Range(0, 256));
   rp->add_flag("!--no-svg", ro.svg, "do not write the figure");
   rp->add_flag("!--no-progress", ro.progress, "no progress bar on stderr");
-  add_robustness_options(*rp, ro.run);
+  add_run_options(*rp, ro.run);
 
   ConvertOptions co;
   auto* cv = app.add_subcommand("convert-mrclam",
@@ -791,11 +689,10 @@ int run(int argc, char** argv) {
     if (rp->parsed()) {
       if (rp_mrclam_rules) {
         const RunOptions m = mrclam_run_defaults();
-        if (rp->count("--miss-probability") == 0)
-          ro.run.landmark_policy.miss_probability = m.landmark_policy.miss_probability;
-        if (rp->count("--static-gate-level") == 0) ro.run.static_gate_level = m.static_gate_level;
-        if (rp->count("--new-if-taken") == 0) ro.run.new_if_candidates_taken = m.new_if_candidates_taken;
-        if (rp->count("--occlusion") == 0) ro.run.occlusion_rad = m.occlusion_rad;
+        if (rp->count("--miss-probability") == 0) ro.run.step.miss_probability = m.step.miss_probability;
+        if (rp->count("--static-gate-level") == 0) ro.run.step.static_gate_level = m.step.static_gate_level;
+        if (rp->count("--new-if-taken") == 0) ro.run.step.new_if_candidates_taken = m.step.new_if_candidates_taken;
+        if (rp->count("--occlusion") == 0) ro.run.step.occlusion_rad = m.step.occlusion_rad;
       }
       ro.progress = ro.progress && isatty(STDERR_FILENO);
       return run_replay(ro);
@@ -813,7 +710,7 @@ int run(int argc, char** argv) {
         return run_sim(so);
       });
     }
-    mo.strategies = parse_strategies(mo_strategies, mo_oracle);
+    mo.strategies = select_methods(mo_strategies, true, mo_oracle);
     if (mo_legacy) mo.camera = mo.drive = false;
     return with_device(mr_link, mo_oracle, [&](const RunInputsFn& runner, const std::string&) {
       mo.runner = runner;

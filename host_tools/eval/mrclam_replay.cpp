@@ -142,10 +142,10 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
 
 RunOptions mrclam_run_defaults() {
   RunOptions o;
-  o.landmark_policy.miss_probability = 1e-5f;
-  o.static_gate_level = 0.95;
-  o.new_if_candidates_taken = true;
-  o.occlusion_rad = 0.03;
+  o.step.miss_probability = 1e-5f;
+  o.step.static_gate_level = 0.95;
+  o.step.new_if_candidates_taken = true;
+  o.step.occlusion_rad = 0.03;
   return o;
 }
 

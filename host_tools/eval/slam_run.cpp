@@ -159,39 +159,50 @@ static void oracle_associate(SlamSession::State& s, const std::vector<SimObserva
   }
 }
 
+std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle) {
+  std::vector<Method> out;
+  if (names.empty()) {
+    for (int k = 0; k < (all_presets ? kStrategyCount : kPaperStrategyCount); ++k) {
+      out.push_back({static_cast<Strategy>(k), false, false});
+    }
+  }
+  for (const std::string& n : names) {
+    Method m;
+    if (!parse_strategy(n.c_str(), m.strategy, m.verify)) {
+      throw std::invalid_argument("unknown strategy '" + n +
+                                  "' (ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, "
+                                  "each optionally with +V)");
+    }
+    out.push_back(m);
+  }
+  if (oracle) out.push_back({Strategy::kJcbb, true, false});
+  return out;
+}
+
+StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sensor) {
+  StepSettings<double> ss = opt.step;
+  ss.local_radius_m = sensor.max_range_m + opt.compensation_m;
+  ss.min_range_m = sensor.min_range_m + opt.view_margin_m;
+  ss.max_range_m = sensor.max_range_m - opt.view_margin_m;
+  ss.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed
+    const StepSettings<double> d;
+    ss.augment = false;
+    ss.confirm_hits = 1;
+    ss.max_misses = d.max_misses;
+    ss.max_tentative_reviews = d.max_tentative_reviews;
+    ss.miss_probability = d.miss_probability;
+    ss.static_gate_level = d.static_gate_level;
+  }
+  return ss;
+}
+
 SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::size_t true_landmarks,
                          const Pose2<double>& x0, const Eigen::Matrix3d& P0)
     : st_(std::make_unique<State>()) {
   State& s = *st_;
   s.opt = opt;
-  node::StepSettings<double> ss;
-  ss.strategy = opt.strategy;
-  ss.params.confidence = opt.confidence;
-  ss.params.local_radius_m = sensor.max_range_m + opt.compensation_m;
-  ss.params.groups = opt.groups;
-  ss.params.condition_groups = opt.condition_groups;
-  ss.params.node_budget = opt.node_budget;
-  ss.params.ambiguity_margin = opt.ambiguity_margin;
-  ss.params.new_if_candidates_taken = opt.new_if_candidates_taken;
-  ss.params.verify = opt.verify;
-  ss.params.seed_min_position_var_m2 = opt.seed_min_position_var_m2;
-  ss.new_landmark_level = opt.new_landmark_gate;
-  ss.view.min_range_m = sensor.min_range_m + opt.view_margin_m;
-  ss.view.max_range_m = sensor.max_range_m - opt.view_margin_m;
-  ss.view.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
-  ss.view.occlusion_rad = opt.occlusion_rad;
-  ss.policy = opt.landmark_policy;
-  if (opt.static_gate_level > 0) {
-    double g = 0;
-    check(chi2_inv(opt.static_gate_level, 2, g), "chi2_inv");
-    ss.policy.static_gate_d2 = static_cast<float>(g);
-  }
-  ss.filter = opt.filter;
-  if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed
-    ss.augment = false;
-    ss.policy = ekf::LandmarkPolicy{};
-    ss.policy.confirm_hits = 1;
-  }
+  const StepSettings<double> ss = step_settings(opt, sensor);
   check(s.step.configure(ss), "configure");
   s.scorer = std::make_unique<RunScorer>(true_landmarks, opt.landmark_group);
   check(s.step.reset(x0, P0), "reset");

@@ -12,6 +12,7 @@
 
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/link_cli.hpp"
+#include "geojcbb_host/run_cli.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/guarded_main.hpp"
 
@@ -30,10 +31,13 @@ int run(int argc, char** argv) {
   RunOptions o;
   add_link_options(app, lc, "device's serial port or pty (default: start --device with --pty)",
                    "device program started when --port is not given");
+  add_run_options(app, o);
   bool list_only = false;
   app.add_flag("--list-ports", list_only, "print the serial ports libserialport finds and exit");
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
-  app.add_option("--strategies", names, "strategies, comma separated (default: all six)")->delimiter(',');
+  app.add_option("--strategies", names,
+                 "strategies, comma separated, each optionally with +V (default: the papers' six)")
+      ->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
   app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);
   CLI11_PARSE(app, argc, argv);
@@ -51,21 +55,21 @@ int run(int argc, char** argv) {
     const Scenario sc = load_scenario(scenario);
     DeviceLink dl(lc, lc.port.empty());
     std::printf("%s\n", dl.describe().c_str());
-    const std::vector<Strategy> strategies = select_strategies(names);
+    const std::vector<Method> methods = select_methods(names, false);
     std::printf("%s, seed %llu, streamed over the link, %d scan(s) in flight\n", sc.name.c_str(),
                 static_cast<unsigned long long>(seed), lc.window);
     print_score_header();
     StreamOptions so;
     so.window = lc.window;
     so.note = [](const std::string& n) { std::printf("  %s\n", n.c_str()); };
-    for (Strategy s : strategies) {
+    for (const Method& m : methods) {
       RunOptions ro = o;
-      ro.strategy = s;
+      m.apply(ro);
       SimSource src(sc, seed, o.max_steps);
       const auto t0 = std::chrono::steady_clock::now();
       const RunResult r = stream_run(dl.session(), src, ro, so);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      print_score_row(s, r, r.scans / secs);
+      print_score_row(m.name(), r, r.scans / secs);
     }
     std::printf("device STATS: %s\n", describe_stats(dl.session().stats()).c_str());
     if (dl.session().reconnections() > 0) {

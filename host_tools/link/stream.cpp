@@ -1,5 +1,7 @@
 #include "geojcbb_host/stream.hpp"
 
+#include "geojcbb/node/node.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,31 +13,13 @@
 
 namespace geojcbb::host {
 
-std::vector<Strategy> select_strategies(const std::vector<std::string>& names) {
-  std::vector<Strategy> out;
-  for (const std::string& n : names) {
-    bool known = false;
-    for (int k = 0; k < kStrategyCount; ++k)
-      known = known || strcasecmp(n.c_str(), to_string(static_cast<Strategy>(k))) == 0;
-    if (!known) throw std::invalid_argument("unknown strategy " + n);
-  }
-  // No names: the papers' six; PCJCBB (and any later preset) when named.
-  for (int k = 0; k < kStrategyCount; ++k) {
-    const Strategy s = static_cast<Strategy>(k);
-    bool take = names.empty() ? k < kPaperStrategyCount : false;
-    for (const std::string& n : names) take = take || strcasecmp(n.c_str(), to_string(s)) == 0;
-    if (take) out.push_back(s);
-  }
-  return out;
-}
-
 void print_score_header(const char* extra) {
   std::printf("  %-8s %6s %8s %7s %6s %6s %10s %8s %8s %10s %10s %9s %s\n", "strategy", "scans", "TP", "TN", "FP", "FN",
               "precision", "recall", "F1", "|x err| m", "|y err| m", "scans/s", extra);
 }
 
-void print_score_row(Strategy s, const RunResult& r, double scans_per_s, const std::string& extra) {
-  std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %9.0f %s\n", to_string(s), r.scans,
+void print_score_row(const std::string& name, const RunResult& r, double scans_per_s, const std::string& extra) {
+  std::printf("  %-8s %6d %8d %7d %6d %6d %10.4f %8.4f %8.4f %10.4f %10.4f %9.0f %s\n", name.c_str(), r.scans,
               r.score.tp, r.score.tn, r.score.fp, r.score.fn, r.score.precision(), r.score.recall(), r.score.f1(),
               r.mean_abs_x_m, r.mean_abs_y_m, scans_per_s, extra.c_str());
   std::fflush(stdout);
@@ -55,26 +39,44 @@ std::string describe_stats(const proto::Stats& st) {
   return s;
 }
 
-proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o) {
-  proto::Config c;
-  c.strategy = static_cast<proto::StrategyCode>(s);
-  c.confidence = static_cast<float>(o.confidence);
-  c.new_landmark_level = static_cast<float>(o.new_landmark_gate);
-  c.local_radius_m = static_cast<float>(sensor.max_range_m + o.compensation_m);
-  c.groups = static_cast<std::uint8_t>(o.groups);
-  c.condition_groups = o.condition_groups;
-  c.node_budget = o.node_budget > 0 ? o.node_budget : DesktopBounds::kMaxJcbbNodes;
-  c.min_range_m = static_cast<float>(sensor.min_range_m + o.view_margin_m);
-  c.max_range_m = static_cast<float>(sensor.max_range_m - o.view_margin_m);
-  c.half_fov_rad = static_cast<float>(0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad);
-  c.confirm_hits = static_cast<std::uint8_t>(o.landmark_policy.confirm_hits);
-  c.max_misses = static_cast<std::uint8_t>(o.landmark_policy.max_misses);
-  c.max_tentative_reviews = static_cast<std::uint8_t>(o.landmark_policy.max_tentative_reviews);
-  return c;
+proto::Config link_config(const SensorModel& sensor, const RunOptions& o) {
+  if (!o.known_map.empty()) {
+    throw std::invalid_argument(
+        "known_map (--known-map): CONFIG carries no landmarks, so a device would map instead of localise; run it "
+        "in process");
+  }
+  const StepSettings<double> s = step_settings(o, sensor);
+  const StepSettings<double> defaults;
+  std::string refused;
+  for_each_option_pair(s, defaults, [&](const options::Info& info, const auto& v, const auto& d) {
+    if (!refused.empty()) return;
+    if (!info.range.contains(options::as_double(v))) {
+      refused = std::string(info.name) + " is outside its range (docs/options.md)";
+    } else if (!node::carried_by_config(options::index_of(info.name)) && !(v == d)) {
+      refused = std::string(info.name) + ": CONFIG does not carry it, and it differs from its default";
+    }
+  });
+  if (!refused.empty()) throw std::invalid_argument("cannot run on a device: " + refused);
+  if (!(s.max_range_m > s.min_range_m))
+    throw std::invalid_argument("cannot run on a device: max_range_m <= min_range_m");
+  return node::config_from(s);
 }
 
-proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o) {
-  return link_config(SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad}, s, o);
+proto::Config link_config(const Scenario& sc, const RunOptions& o) {
+  return link_config(SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad}, o);
+}
+
+void check_capacity(const proto::Config& c, const proto::Capabilities& caps) {
+  auto refuse = [](const std::string& what) { throw std::invalid_argument("cannot run on this device: " + what); };
+  if (c.groups > caps.max_groups) {
+    refuse("groups " + std::to_string(c.groups) + " > the device's " + std::to_string(caps.max_groups));
+  }
+  if (c.node_budget > caps.max_jcbb_nodes) {
+    refuse("node_budget " + std::to_string(c.node_budget) + " > the device's " + std::to_string(caps.max_jcbb_nodes));
+  }
+  if (c.rjc && c.rjc_subset > caps.max_observations) {
+    refuse("rjc_subset " + std::to_string(c.rjc_subset) + " > the device's " + std::to_string(caps.max_observations));
+  }
 }
 
 proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0) {
@@ -148,8 +150,8 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   const std::size_t device_obs = std::min<std::size_t>(kLinkMaxObs, caps.max_observations);
   const std::size_t max_obs =
       so.max_observations > 0 ? std::min(device_obs, static_cast<std::size_t>(so.max_observations)) : device_obs;
-  proto::Config c = link_config(src.sensor, o.strategy, o);
-  c.node_budget = std::min(c.node_budget, caps.max_jcbb_nodes);
+  const proto::Config c = link_config(src.sensor, o);
+  check_capacity(c, caps);
   link.configure(c);
   link.reset(link_reset(src.x0, src.P0));
   RunScorer scorer(src.true_landmarks, o.landmark_group);
@@ -240,15 +242,13 @@ RunResult stream_run(ScanLink& link, RunSource& src, const RunOptions& o, const 
   }
 }
 
-RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
+RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, const RunOptions& o,
                           const ScanHook& hook) {
-  RunOptions ro = o;
-  ro.strategy = s;
   SimSource src(sc, seed, o.max_steps);
   PlainLink pl(link);
   StreamOptions so;
   so.hook = hook;
-  return stream_run(pl, src, ro, so);
+  return stream_run(pl, src, o, so);
 }
 
 }  // namespace geojcbb::host

@@ -49,49 +49,42 @@ void check(Status s, const char* what) {
   if (s != Status::kOk) raise(s, what);
 }
 
-Strategy parse_strategy(const std::string& name) {
-  for (int k = 0; k < kStrategyCount; ++k)
-    if (name == to_string(static_cast<Strategy>(k))) return static_cast<Strategy>(k);
-  raise(Status::kInvalidInput, "unknown strategy '" + name + "'");
-}
-
-StrategyParams<T> parse_options(const py::kwargs& kw) {
-  StrategyParams<T> p;
+/// The settings from keyword arguments, each named as its option (core/options.h); "strategy" as a
+/// name ("+V" switches the verification in, as for the command-line tools).
+StepSettings<T> parse_settings(const std::string& strategy, const py::kwargs& kw) {
+  StepSettings<T> s;
+  bool verify = false;
+  if (!parse_strategy(strategy.c_str(), s.strategy, verify)) {
+    raise(Status::kInvalidInput, "unknown strategy '" + strategy + "'");
+  }
+  s.verify = verify;
   for (auto item : kw) {
     const std::string k = py::cast<std::string>(item.first);
-    py::handle v = item.second;
-    if (k == "confidence")
-      p.confidence = py::cast<double>(v);
-    else if (k == "local_radius_m")
-      p.local_radius_m = py::cast<double>(v);
-    else if (k == "groups")
-      p.groups = py::cast<int>(v);
-    else if (k == "dbscan_eps_m")
-      p.dbscan_eps_m = py::cast<double>(v);
-    else if (k == "dbscan_min_points")
-      p.dbscan_min_points = py::cast<int>(v);
-    else if (k == "joint_recheck")
-      p.joint_recheck = py::cast<bool>(v);
-    else if (k == "condition_groups")
-      p.condition_groups = py::cast<bool>(v);
-    else if (k == "node_budget")
-      p.node_budget = py::cast<NodeCount>(v);
-    else if (k == "ambiguity_margin")
-      p.ambiguity_margin = py::cast<double>(v);
-    else if (k == "new_if_candidates_taken")
-      p.new_if_candidates_taken = py::cast<bool>(v);
-    else if (k == "verify")
-      p.verify = py::cast<bool>(v);
-    else if (k == "seed_min_position_var_m2")
-      p.seed_min_position_var_m2 = py::cast<double>(v);
-    else if (k == "consistency_wide_d2")
-      p.consistency_wide_d2 = py::cast<double>(v);
-    else if (k == "consistency_pair_d2")
-      p.consistency_pair_d2 = py::cast<double>(v);
-    else
-      throw py::type_error("unknown option '" + k + "'");
+    bool known = false;
+    for_each_option(s, [&](const options::Info& info, auto& v) {
+      using V = std::remove_reference_t<decltype(v)>;
+      if (k != info.name) return;
+      known = true;
+      if constexpr (std::is_same<V, Strategy>::value) {
+        throw py::type_error("the strategy is the positional argument 'strategy'");
+      } else {
+        v = py::cast<V>(item.second);
+      }
+    });
+    if (!known) throw py::type_error("unknown option '" + k + "'");
   }
-  return p;
+  return s;
+}
+
+/// The options' keywords for the docstrings: "name (TYPE, default d[, unit]): meaning", one a line.
+std::string options_doc() {
+  std::string d;
+  for (const options::Info& o : options::kInfo) {
+    if (std::string(o.name) == "strategy") continue;
+    d += std::string("  ") + o.name + " (" + o.type + ", default " + o.default_text +
+         (o.unit[0] != '\0' ? std::string(", ") + o.unit : std::string()) + "): " + o.meaning + "\n";
+  }
+  return d;
 }
 
 /// z (m, 2), R (m, 2, 2) into obs. Shapes: kInvalidInput; counts: kCapacityExceeded.
@@ -109,18 +102,6 @@ void load_observations(const Arr& z, const Arr& R, Observations<T, PyBounds>& ob
     obs.z[i] = Vec2<T>(zp[2 * i], zp[2 * i + 1]);
     obs.R[i] << rp[4 * i], rp[4 * i + 1], rp[4 * i + 2], rp[4 * i + 3];
   }
-}
-
-// A new StrategyParams field must be compared here (and parsed in parse_options).
-static_assert(sizeof(StrategyParams<T>) == 88, "StrategyParams changed: update same_params and parse_options");
-bool same_params(const StrategyParams<T>& a, const StrategyParams<T>& b) {
-  return a.confidence == b.confidence && a.local_radius_m == b.local_radius_m && a.groups == b.groups &&
-         a.dbscan_eps_m == b.dbscan_eps_m && a.dbscan_min_points == b.dbscan_min_points &&
-         a.joint_recheck == b.joint_recheck && a.condition_groups == b.condition_groups &&
-         a.node_budget == b.node_budget && a.ambiguity_margin == b.ambiguity_margin &&
-         a.new_if_candidates_taken == b.new_if_candidates_taken && a.verify == b.verify &&
-         a.seed_min_position_var_m2 == b.seed_min_position_var_m2 && a.consistency_wide_d2 == b.consistency_wide_d2 &&
-         a.consistency_pair_d2 == b.consistency_pair_d2;
 }
 
 py::dict diagnostics(const AssociationDiagnostics& d) {
@@ -144,8 +125,7 @@ struct AssocState {
   // test size (2 .. 2 x 64 dof), which costs more than a small association; reused while the
   // strategy and its options stay the same.
   bool have_cfg = false;
-  Strategy strategy = Strategy::kGeojcbb;
-  StrategyParams<T> params;
+  StepSettings<T> settings;
   AssociationConfig<T, PyBounds> cfg;
   Observations<T, PyBounds> obs;
   Prediction<T, PyBounds> pred;
@@ -157,14 +137,12 @@ py::dict associate_py(const Arr& z, const Arr& R, const Arr& h, const Arr& C,
                       const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& ids,
                       const std::string& strategy, const py::kwargs& kw) {
   static std::unique_ptr<AssocState> st(new AssocState());  // several MB: on the heap, reused
-  const Strategy s = parse_strategy(strategy);
-  const StrategyParams<T> p_in = parse_options(kw);
-  if (!st->have_cfg || s != st->strategy || !same_params(p_in, st->params)) {
+  const StepSettings<T> settings = parse_settings(strategy, kw);
+  if (!st->have_cfg || !same_settings(settings, st->settings)) {
     st->have_cfg = false;
-    check(make_strategy(s, p_in, st->cfg), "make_strategy");
+    check(make_strategy(settings.strategy, settings, st->cfg), "make_strategy");
     st->have_cfg = true;
-    st->strategy = s;
-    st->params = p_in;
+    st->settings = settings;
   }
   const AssociationConfig<T, PyBounds>& cfg = st->cfg;
   load_observations(z, R, st->obs);
@@ -222,21 +200,8 @@ const char* outcome_name(node::Outcome o) {
 /// node::SlamStep<double, PyBounds> with its inputs and outputs (several MB: one heap object).
 class PySlam {
  public:
-  PySlam(const std::string& strategy, double local_radius_m, double max_range_m, double half_fov_rad,
-         double min_range_m, double new_landmark_level, bool augment, bool first_estimates_jacobians,
-         const py::kwargs& kw)
-      : s_(new State()) {
-    node::StepSettings<T> st;
-    st.strategy = parse_strategy(strategy);
-    st.params = parse_options(kw);
-    st.params.local_radius_m = local_radius_m;
-    st.view.min_range_m = min_range_m;
-    st.view.max_range_m = max_range_m;
-    st.view.half_fov_rad = half_fov_rad;
-    st.new_landmark_level = new_landmark_level;
-    st.augment = augment;
-    st.filter.first_estimates_jacobians = first_estimates_jacobians;
-    check(s_->step.configure(st), "configure");
+  PySlam(const std::string& strategy, const py::kwargs& kw) : s_(new State()) {
+    check(s_->step.configure(parse_settings(strategy, kw)), "configure");
   }
   void reset(const Arr& x0, const Arr& P0) {
     if (x0.size() != 3 || P0.ndim() != 2 || P0.shape(0) != 3 || P0.shape(1) != 3)
@@ -366,27 +331,38 @@ PYBIND11_MODULE(_core, m) {
   py::list names;
   for (int k = 0; k < kStrategyCount; ++k) names.append(to_string(static_cast<Strategy>(k)));
   m.attr("STRATEGIES") = names;
-  m.def("associate", &associate_py, py::arg("z"), py::arg("R"), py::arg("h"), py::arg("C"), py::arg("ids"),
-        py::arg("strategy") = "GEOJCBB",
-        R"doc(Associates one scan's observations with the predicted candidates.
+  py::list opts;
+  for (const options::Info& o : options::kInfo) {
+    py::dict d;
+    d["name"] = o.name;
+    d["type"] = o.type;
+    d["default"] = o.default_text;
+    d["unit"] = o.unit;
+    d["meaning"] = o.meaning;
+    opts.append(d);
+  }
+  m.attr("OPTIONS") = opts;
+  static const std::string assoc_doc = std::string(
+                                           R"doc(Associates one scan's observations with the predicted candidates.
 
 z: (m, 2) observations (range [m], bearing [rad]); R: (m, 2, 2) their noise [m^2, rad^2];
 h: (n, 2) predicted (range [m], bearing [rad]); C: (2n, 2n) H P H^T, candidate j at rows 2j, 2j+1;
-ids: (n,) feature ids >= 0. strategy: one of STRATEGIES. Options (keywords): confidence,
-local_radius_m [m] (r + d, needed by GEMJCBB/GEOJCBB), groups, dbscan_eps_m [m], dbscan_min_points,
-joint_recheck, condition_groups, node_budget, ambiguity_margin, new_if_candidates_taken.
+ids: (n,) feature ids >= 0. strategy: one of STRATEGIES ("+V" appended switches the verification in).
 Returns a dict: feature (m,) int32 (id, NEW_FEATURE or UNMATCHED), candidate (m,) (index or -1),
 d2 (m,), pairings, joint_d2, jointly_compatible, diagnostics (dict of counters).
 Raises GeojcbbError (.status: kNonFinite, kInvalidInput, kCapacityExceeded, kNotSymmetric,
-kNotPositiveDefinite, kNoConvergence).)doc");
+kNotPositiveDefinite, kNoConvergence); TypeError for an unknown keyword.
+Options (keywords; OPTIONS lists them; the association reads its own):
+)doc") + options_doc();
+  static const std::string slam_doc =
+      std::string(
+          "strategy: one of STRATEGIES (\"+V\" appended switches the verification in). Options "
+          "(keywords; OPTIONS lists them):\n") +
+      options_doc() + "Raises GeojcbbError (kInvalidInput for an option outside its range), TypeError.";
+  m.def("associate", &associate_py, py::arg("z"), py::arg("R"), py::arg("h"), py::arg("C"), py::arg("ids"),
+        py::arg("strategy") = "GEOJCBB", assoc_doc.c_str());
   py::class_<PySlam>(m, "Slam", "One EKF-SLAM step with data association (node::SlamStep<double>).")
-      .def(py::init<const std::string&, double, double, double, double, double, bool, bool, const py::kwargs&>(),
-           py::arg("strategy") = "GEOJCBB", py::arg("local_radius_m"), py::arg("max_range_m"),
-           py::arg("half_fov_rad") = 3.14159265358979, py::arg("min_range_m") = 0.0,
-           py::arg("new_landmark_level") = 0.999, py::arg("augment") = true,
-           py::arg("first_estimates_jacobians") = true,
-           "local_radius_m: r + d [m]; max_range_m, min_range_m [m] and half_fov_rad [rad]: where a mapped\n"
-           "landmark is expected to be seen; other keywords as for associate(). Raises GeojcbbError.")
+      .def(py::init<const std::string&, const py::kwargs&>(), py::arg("strategy") = "GEOJCBB", slam_doc.c_str())
       .def("reset", &PySlam::reset, py::arg("x0"), py::arg("P0"),
            "Clears the map. x0 = (x [m], y [m], theta [rad]); P0 (3, 3).")
       .def("predict", &PySlam::predict, py::arg("v_mps"), py::arg("w_radps"), py::arg("dt_s"), py::arg("sigma_v_mps"),

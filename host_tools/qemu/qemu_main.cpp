@@ -15,6 +15,7 @@
 
 #include "geojcbb_host/mirror.hpp"
 #include "geojcbb_host/qemu.hpp"
+#include "geojcbb_host/run_cli.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/guarded_main.hpp"
 
@@ -49,8 +50,8 @@ bool matches(const proto::Capabilities& c) {
 
 // One strategy over the link, optionally mirrored by the in-process node with bounds B.
 template <class B>
-RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o, bool check,
-                  bool budget, int timeout_ms, MirrorReport& mirror_report, Budget& b) {
+RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const RunOptions& o, bool check, bool budget,
+                  int timeout_ms, MirrorReport& mirror_report, Budget& b) {
   std::unique_ptr<MirrorTransport<B>> mirror;
   if (check) mirror = std::make_unique<MirrorTransport<B>>(port);
   Transport& t = check ? static_cast<Transport&>(*mirror) : port;
@@ -72,7 +73,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
       b.started = true;
     };
   }
-  RunResult r = stream_scenario(link, sc, seed, s, o, hook);
+  RunResult r = stream_scenario(link, sc, seed, o, hook);
   if (mirror) mirror_report = mirror->report();
   return r;
 }
@@ -81,7 +82,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, Strat
 // observations arrive with a covariance so wide (sigma 20 m, 1 rad) that every observation is
 // individually compatible with every landmark: the most expensive gating and grouping, and the
 // widest JCBB tree (which its bound still prunes: no such scan reached the node budget).
-void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Strategy>& strategies, int scans,
+void worst_case(Transport& port, const proto::Capabilities& caps, const std::vector<Method>& methods, int scans,
                 int timeout_ms, NodeCount node_budget) {
   const NodeCount budget = node_budget > 0 ? node_budget : caps.max_jcbb_nodes;
   std::printf("worst case: %u observations, each compatible with each of %u landmarks; node budget %u\n",
@@ -89,11 +90,12 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
   std::printf("  %-8s %6s %12s %14s %14s %14s\n", "strategy", "scans", "budget hits", "assoc median", "assoc max",
               "step max");
   const std::size_t m = std::min<std::size_t>(caps.max_observations, kLinkMaxObs);
-  for (Strategy s : strategies) {
+  for (const Method& method : methods) {
     LinkClient link(port, timeout_ms);
     link.hello();
     proto::Config c;
-    c.strategy = static_cast<proto::StrategyCode>(s);
+    c.strategy = static_cast<proto::StrategyCode>(method.strategy);
+    c.verify = method.verify;
     c.local_radius_m = 40.0f;
     c.max_range_m = 30.0f;
     c.node_budget = budget;
@@ -126,7 +128,7 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
       step.push_back(st.instr_step);
     }
     const std::uint32_t hits = link.stats().budget_hits - hits0;
-    std::printf("  %-8s %6d %12u %14u %14u %14u\n", to_string(s), scans, hits, median(assoc), maximum(assoc),
+    std::printf("  %-8s %6d %12u %14u %14u %14u\n", method.name(), scans, hits, median(assoc), maximum(assoc),
                 maximum(step));
   }
 }
@@ -151,11 +153,13 @@ int run(int argc, char** argv) {
   app.add_option("--machine", q.machine, "QEMU machine: mps2-an386 or netduinoplus2 (the ELF must be built for it)")
       ->default_val(q.machine);
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
-  app.add_option("--strategies", names, "strategies, comma separated (default: all six)")->delimiter(',');
+  app.add_option("--strategies", names,
+                 "strategies, comma separated, each optionally with +V (default: the papers' six)")
+      ->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
   app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);
   app.add_option("--timeout-ms", timeout_ms, "wait for each reply at most this long")->default_val(timeout_ms);
-  app.add_option("--node-budget", o.node_budget, "JCBB nodes per scan (0: the firmware's capacity)")->default_val(0);
+  add_run_options(app, o);
   app.add_flag("--check", check,
                "compare every ASSOC_RESULT and POSE, bit for bit, with the same node run in float in this process");
   app.add_flag("--budget", budget, "collect each scan's instruction counts (STATS after every scan)");
@@ -187,11 +191,11 @@ int run(int argc, char** argv) {
                large = matches<LargeControllerBounds>(caps);
     if (check && !small && !dflt && !large)
       throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
-    std::vector<Strategy> strategies = select_strategies(names);
+    std::vector<Method> strategies = select_methods(names, false);
     if (worst > 0 && check)
       throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
     if (worst > 0) {
-      worst_case(port, caps, strategies, worst, timeout_ms, o.node_budget);
+      worst_case(port, caps, strategies, worst, timeout_ms, o.step.node_budget);
       strategies.clear();
     }
     if (!strategies.empty())
@@ -205,14 +209,15 @@ int run(int argc, char** argv) {
       csv << "scenario,strategy,scan,observations,instr_associate,instr_step,instr_predict_local,instr_update,"
              "instr_augment_review\n";
     }
-    for (Strategy s : strategies) {
+    for (const Method& m : strategies) {
+      RunOptions ro = o;
+      m.apply(ro);
       MirrorReport mr;
       Budget b;
       const auto t0 = std::chrono::steady_clock::now();
-      const RunResult r = small ? run_one<SmallControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
-                          : dflt
-                              ? run_one<DefaultBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b)
-                              : run_one<LargeControllerBounds>(port, sc, seed, s, o, check, budget, timeout_ms, mr, b);
+      const RunResult r = small  ? run_one<SmallControllerBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b)
+                          : dflt ? run_one<DefaultBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b)
+                                 : run_one<LargeControllerBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::string verdict;
       if (check) {
@@ -221,12 +226,12 @@ int run(int argc, char** argv) {
                                      : std::to_string(mr.mismatched) + " DIFFER; first: " + mr.first_mismatch;
         if (mr.mismatched != 0 || mr.assoc_results != static_cast<std::uint64_t>(r.scans)) rc = 1;
       }
-      print_score_row(s, r, r.scans / secs, verdict);
+      print_score_row(m.name(), r, r.scans / secs, verdict);
       if (csv.is_open()) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
-          csv << '"' << sc.name << "\"," << to_string(s) << ',' << i << ',' << b.observations[i] << ','
-              << b.associate[i] << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ','
-              << b.augment_review[i] << '\n';
+          csv << '"' << sc.name << "\"," << m.name() << ',' << i << ',' << b.observations[i] << ',' << b.associate[i]
+              << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ',' << b.augment_review[i]
+              << '\n';
         }
       }
       budgets.push_back(std::move(b));
@@ -237,7 +242,7 @@ int run(int argc, char** argv) {
                   "step max", "scans>=20", "assoc20 med", "assoc20 max");
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
-        std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", to_string(strategies[k]), median(b.associate),
+        std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", strategies[k].name(), median(b.associate),
                     maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(), median(b.associate20),
                     maximum(b.associate20));
       }
@@ -245,7 +250,7 @@ int run(int argc, char** argv) {
         const Budget& b = budgets[k];
         if (!b.budget_hit.empty()) {
           std::printf("  %-8s %zu scans hit the JCBB node budget; their association: max %u instructions\n",
-                      to_string(strategies[k]), b.budget_hit.size(), maximum(b.budget_hit));
+                      strategies[k].name(), b.budget_hit.size(), maximum(b.budget_hit));
         }
       }
     }

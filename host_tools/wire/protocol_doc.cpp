@@ -15,6 +15,7 @@
 #include <string>
 
 #include "geojcbb/protocol/protocol.hpp"
+#include "geojcbb_host/generated_block.hpp"
 #include "geojcbb_host/guarded_main.hpp"
 
 namespace {
@@ -119,75 +120,16 @@ std::string render_all(MessageList<M...>) {
 
 /// Splits text around the generated block: [0, b) before, [b, e) the block with its markers and
 /// the newline after the end marker, [e, size) after. False when the markers are missing.
-bool find_block(const std::string& text, std::size_t& b, std::size_t& e) {
-  b = text.find(kBegin);
-  const std::size_t end = text.find(kEnd);
-  if (b == std::string::npos || end == std::string::npos || end < b) return false;
-  e = end + std::string(kEnd).size();
-  if (e < text.size() && text[e] == '\n') ++e;
-  return true;
-}
-
 }  // namespace
 
 namespace {
 
 int run(int argc, char** argv) {
-  CLI::App app{"docs/protocol.md's message tables from the protocol's message descriptions"};
-  std::string check;
-  std::string update;
-  app.add_option("--check", check, "fail when this file's generated block is stale");
-  app.add_option("--update", update, "rewrite this file's generated block");
-  CLI11_PARSE(app, argc, argv);
-
-  const std::string block = render_all(AllMessages<>{});
-  if (check.empty() && update.empty()) {
-    std::cout << block;
-    return 0;
-  }
-  const std::string& path = check.empty() ? update : check;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    std::cerr << "cannot read " << path << "\n";
-    return 2;
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
-  std::size_t b = 0;
-  std::size_t e = 0;
-  if (!find_block(text, b, e)) {
-    std::cerr << path << ": no generated block (marker lines '" << kBegin << "' and '" << kEnd << "')\n";
-    return 2;
-  }
-  const std::string current = text.substr(b, e - b);
-  if (!check.empty()) {
-    if (current == block) {
-      std::cout << path << ": message tables current (schema hash " << std::hex << kSchemaHash << ")\n";
-      return 0;
-    }
-    std::size_t i = 0;
-    while (i < current.size() && i < block.size() && current[i] == block[i]) ++i;
-    const std::size_t line =
-        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(b + i), '\n'));
-    std::cerr << path << ": the message tables are stale (first difference at line " << line
-              << "); regenerate with `cmake --build build/host-release --target protocol_docs`\n"
-              << "  file:      " << current.substr(i, current.find('\n', i) - i) << "\n"
-              << "  generated: " << block.substr(i, block.find('\n', i) - i) << "\n";
-    return 1;
-  }
-  if (current == block) {
-    std::cout << path << ": already current\n";
-    return 0;
-  }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text.substr(0, b) << block << text.substr(e);
-  if (!out) {
-    std::cerr << "cannot write " << path << "\n";
-    return 2;
-  }
-  std::cout << path << ": message tables rewritten\n";
-  return 0;
+  const geojcbb::host::GeneratedBlock g{kBegin, kEnd, "message tables",
+                                        "cmake --build build/host-release --target protocol_docs"};
+  return geojcbb::host::generated_block_main(
+      argc, argv, "docs/protocol.md's message tables from the protocol's message descriptions", g,
+      render_all(AllMessages<>{}));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "geojcbb.h"
+#include "geojcbb/c_settings.hpp"
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb/pipeline_f32.hpp"
 
@@ -10,20 +11,6 @@ using namespace geojcbb;
 using B = DefaultBounds;
 
 namespace {
-StrategyParams<float> params_of(const geojcbb_strategy_params& p) {
-  StrategyParams<float> q;
-  q.confidence = p.confidence;
-  q.local_radius_m = p.local_radius_m;
-  q.groups = p.groups;
-  q.dbscan_eps_m = p.dbscan_eps_m;
-  q.dbscan_min_points = p.dbscan_min_points;
-  q.joint_recheck = p.joint_recheck != 0;
-  q.condition_groups = p.condition_groups != 0;
-  q.node_budget = p.node_budget;
-  q.ambiguity_margin = p.ambiguity_margin;
-  q.new_if_candidates_taken = p.new_if_candidates_taken != 0;
-  return q;
-}
 ObservationsF g_obs;
 PredictionF g_pred;
 AssociationWorkspaceF g_ws;
@@ -40,11 +27,13 @@ void load(int m, const float* z, const float* R) {
 }
 }  // namespace
 
-extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int m, const float* z, const float* R,
-                             int n, const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2,
+extern "C" int ref_associate(const geojcbb_settings* p, int m, const float* z, const float* R, int n,
+                             const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2,
                              float* joint_d2, int* pairings, uint32_t* nodes) {
   AssociationConfigF cfg;
-  Status s = make_strategy(static_cast<Strategy>(strategy), params_of(*p), cfg);
+  // The product's own C boundary (geojcbb/c_settings.hpp), then the C++ pipeline.
+  const StepSettings<float> settings = c_boundary::from_c(*p);
+  Status s = make_strategy(settings.strategy, settings, cfg);
   if (s != Status::kOk) return static_cast<int>(s);
   load(m, z, R);
   s = g_pred.C.assign_dense(
@@ -67,13 +56,8 @@ extern "C" int ref_associate(int strategy, const geojcbb_strategy_params* p, int
   return 0;
 }
 
-extern "C" int ref_slam_start(int strategy, float radius_m, float max_range_m, float half_fov_rad, const float x0[3],
-                              const float P0[9]) {
-  node::StepSettings<float> st;
-  st.strategy = static_cast<Strategy>(strategy);
-  st.params.local_radius_m = radius_m;
-  st.view.max_range_m = max_range_m;
-  st.view.half_fov_rad = half_fov_rad;
+extern "C" int ref_slam_start(const geojcbb_settings* settings, const float x0[3], const float P0[9]) {
+  const node::StepSettings<float> st = c_boundary::from_c(*settings);
   Status s = g_step.configure(st);
   if (s != Status::kOk) return static_cast<int>(s);
   Mat3<float> P;

@@ -7,11 +7,10 @@
 
 #include "geojcbb.h"
 
-int ref_associate(int strategy, const geojcbb_strategy_params* p, int m, const float* z, const float* R, int n,
-                  const int32_t* ids, const float* h, const float* C, int32_t* feature, float* d2, float* joint_d2,
-                  int* pairings, uint32_t* nodes);
-int ref_slam_start(int strategy, float radius_m, float max_range_m, float half_fov_rad, const float x0[3],
-                   const float P0[9]);
+int ref_associate(const geojcbb_settings* p, int m, const float* z, const float* R, int n, const int32_t* ids,
+                  const float* h, const float* C, int32_t* feature, float* d2, float* joint_d2, int* pairings,
+                  uint32_t* nodes);
+int ref_slam_start(const geojcbb_settings* st, const float x0[3], const float P0[9]);
 int ref_slam_predict(float v, float w, float dt, float sv, float sw);
 int ref_slam_step(int m, const float* z, const float* R, int32_t* feature, uint8_t* outcome, float pose[3]);
 
@@ -108,11 +107,13 @@ static void test_strategies_bit_for_bit(void) {
   static scene s;
   int strategy, k, compared = 0;
   for (strategy = GEOJCBB_STRATEGY_ICNN; strategy <= GEOJCBB_STRATEGY_PCJCBB; ++strategy) {
-    geojcbb_strategy_params p;
+    geojcbb_settings p;
     geojcbb_associator* a = NULL;
-    geojcbb_strategy_params_default(&p);
+    geojcbb_settings_default(&p);
+    p.strategy = (geojcbb_strategy)strategy;
     p.local_radius_m = 12.f;
-    CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)strategy, &p, &a) == GEOJCBB_OK);
+    p.verify = strategy == GEOJCBB_STRATEGY_JCBB; /* an option no preset sets, through the C boundary */
+    CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) == GEOJCBB_OK);
     for (k = 0; k < 40; ++k) {
       geojcbb_association out;
       int32_t feature[GEOJCBB_MAX_OBSERVATIONS];
@@ -124,7 +125,7 @@ static void test_strategies_bit_for_bit(void) {
       geojcbb_status st;
       make_scene(&s, n, m);
       st = geojcbb_associate(a, s.m, s.z, s.R, s.n, s.ids, s.h, s.C, &out);
-      rs = ref_associate(strategy, &p, s.m, s.z, s.R, s.n, s.ids, s.h, s.C, feature, d2, &joint, &pairings, &nodes);
+      rs = ref_associate(&p, s.m, s.z, s.R, s.n, s.ids, s.h, s.C, feature, d2, &joint, &pairings, &nodes);
       CHECK((int)st == rs);
       if (st != GEOJCBB_OK) continue;
       CHECK(out.count == m);
@@ -143,22 +144,30 @@ static void test_strategies_bit_for_bit(void) {
 static void test_bad_inputs(void) {
   static scene s;
   static unsigned char small[64];
-  geojcbb_strategy_params p;
+  geojcbb_settings p;
   geojcbb_associator* a = NULL;
   geojcbb_association out;
   geojcbb_slam* sl = NULL;
-  geojcbb_strategy_params_default(&p);
-  CHECK(geojcbb_associator_init(small, sizeof small, GEOJCBB_STRATEGY_JCBB, &p, &a) == GEOJCBB_INVALID_INPUT);
-  CHECK(geojcbb_associator_init(assoc_mem.bytes + 8, sizeof assoc_mem - 8, GEOJCBB_STRATEGY_JCBB, &p, &a) ==
-        GEOJCBB_INVALID_INPUT);
+  geojcbb_settings_default(&p);
+  p.strategy = GEOJCBB_STRATEGY_JCBB;
+  CHECK(geojcbb_associator_init(small, sizeof small, &p, &a) == GEOJCBB_INVALID_INPUT);
+  CHECK(geojcbb_associator_init(assoc_mem.bytes + 8, sizeof assoc_mem - 8, &p, &a) == GEOJCBB_INVALID_INPUT);
   CHECK(geojcbb_slam_init(slam_mem.bytes, GEOJCBB_SLAM_STORAGE_SIZE - 1, &sl) == GEOJCBB_INVALID_INPUT);
-  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, (geojcbb_strategy)(GEOJCBB_STRATEGY_PCJCBB + 1), &p,
-                                &a) == GEOJCBB_INVALID_INPUT);
+  p.strategy = (geojcbb_strategy)(GEOJCBB_STRATEGY_PCJCBB + 1);
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) == GEOJCBB_INVALID_INPUT);
   /* GEOJCBB needs r + d > 0 */
-  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, GEOJCBB_STRATEGY_GEOJCBB, &p, &a) ==
-        GEOJCBB_INVALID_INPUT);
+  p.strategy = GEOJCBB_STRATEGY_GEOJCBB;
+  p.local_radius_m = 0.f;
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) == GEOJCBB_INVALID_INPUT);
   CHECK(a == NULL);
-  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, GEOJCBB_STRATEGY_JCBB, &p, &a) == GEOJCBB_OK);
+  /* an option outside its table range */
+  p.strategy = GEOJCBB_STRATEGY_JCBB;
+  p.local_radius_m = 12.f;
+  p.confidence = 1.0;
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) == GEOJCBB_INVALID_INPUT);
+  CHECK(a == NULL);
+  p.confidence = 0.99;
+  CHECK(geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) == GEOJCBB_OK);
   make_scene(&s, 4, 4);
   out.count = -7;
   CHECK(geojcbb_associate(a, GEOJCBB_MAX_OBSERVATIONS + 1, s.z, s.R, s.n, s.ids, s.h, s.C, &out) ==
@@ -184,11 +193,13 @@ static void test_bad_inputs(void) {
 static void test_slam_bit_for_bit(void) {
   static scene s;
   geojcbb_slam* sl = NULL;
-  geojcbb_slam_settings st;
+  geojcbb_settings st;
   const float x0[3] = {0.f, 0.f, 0.f}, P0[9] = {1e-4f, 0, 0, 0, 1e-4f, 0, 0, 0, 1e-4f};
   int k, i, steps = 0, landmarks_seen = 0;
-  geojcbb_slam_settings_default(&st);
-  st.params.local_radius_m = 20.f; /* every landmark of the scene (ranges up to 15 m) is a candidate */
+  geojcbb_settings_default(&st);
+  st.local_radius_m = 20.f;    /* every landmark of the scene (ranges up to 15 m) is a candidate */
+  st.miss_probability = 1e-3f; /* options set through the C boundary reach the step */
+  st.static_gate_level = 0.99;
   st.max_range_m = 15.f;
   st.half_fov_rad = 3.14159f;
   CHECK(geojcbb_slam_init(&slam_mem, sizeof slam_mem, &sl) == GEOJCBB_OK);
@@ -199,7 +210,7 @@ static void test_slam_bit_for_bit(void) {
   }
   CHECK(geojcbb_slam_configure(sl, &st) == GEOJCBB_OK);
   CHECK(geojcbb_slam_reset(sl, x0, P0) == GEOJCBB_OK);
-  CHECK(ref_slam_start(GEOJCBB_STRATEGY_GEOJCBB, 20.f, 15.f, 3.14159f, x0, P0) == 0);
+  CHECK(ref_slam_start(&st, x0, P0) == 0);
   make_scene(&s, 12, 12); /* a fixed world seen from a robot standing still, observed repeatedly */
   for (k = 0; k < 30; ++k) {
     geojcbb_step_result r;

@@ -65,7 +65,7 @@ void check_no_alloc_strategies(int m, int n) {
     auto p = scene_problem<T, B>(scene_params(m, n, 8), seed);
     for (int s = 0; s < kStrategyCount; ++s) {
       for (int k : {0, 3, -3}) {  // GMM-EM by BIC and fixed K; -3: K = 3 with the verification
-        StrategyParams<T> sp;
+        StepSettings<T> sp;
         sp.local_radius_m = T(6);
         sp.groups = k < 0 ? -k : k;
         sp.verify = k < 0;

@@ -173,7 +173,7 @@ void run(Input& in) {
 
   // A configuration: one of the strategies with fuzzed parameters (or the default on refusal).
   {
-    StrategyParams<T> p;
+    StepSettings<T> p;
     const std::uint8_t k = in.u8();
     p.local_radius_m = T(10);
     if (k & 1) p.confidence = in.f(0.99);
@@ -192,7 +192,7 @@ void run(Input& in) {
       s.cfg = c;
     } else {
       require(before.same(c));
-      require(make_strategy(Strategy::kJcbb, StrategyParams<T>{}, s.cfg) == Status::kOk);
+      require(make_strategy(Strategy::kJcbb, StepSettings<T>{}, s.cfg) == Status::kOk);
     }
   }
 

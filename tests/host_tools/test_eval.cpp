@@ -18,7 +18,7 @@ TEST_CASE("scoring: TP, TN, FP, FN on a hand-computed sequence of scans") {
   // spot (10, 0), so geometry cannot tell them apart; with both in one group
   // the group score calls their mix-up right.
   RunOptions o;
-  o.strategy = Strategy::kJcbb;
+  o.step.strategy = Strategy::kJcbb;
   o.landmark_group = {0, 0, 2};
   const SensorModel sensor{0.5, 30.0, 2 * kPi<double>, 0.001};
   SlamSession s(o, sensor, 3, Pose2<double>{0, 0, 0}, Eigen::Matrix3d::Identity() * 1e-9);

@@ -11,17 +11,12 @@
 #include "geojcbb/node/node.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "support/pty_device.hpp"
+#include "support/reply_check.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
 
 namespace {
-std::uint32_t bits(float f) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
-
 using Device = geojcbb::test::PtyDevice;
 }  // namespace
 
@@ -39,10 +34,11 @@ TEST_CASE("loopback: a whole env1 run over a pty equals the in-process float pip
   for (Strategy s : {Strategy::kGeojcbb, Strategy::kJcbb}) {
     CAPTURE(to_string(s));
     RunOptions o;
+    o.step.strategy = s;
     o.max_steps = 0;  // the whole lap: 737 scans
     // The reference: the same messages, decoded the same way, run in this process.
     auto ref = std::make_unique<node::SlamStep<float, DesktopBounds>>();
-    REQUIRE(ref->configure(node::settings_from<float, DesktopBounds>(link_config(sc, s, o))) == Status::kOk);
+    REQUIRE(ref->configure(node::settings_from<float, DesktopBounds>(link_config(sc, o))) == Status::kOk);
     Pose2<float> x0;
     Mat3<float> P0;
     node::reset_from(link_reset(sc), x0, P0);
@@ -62,24 +58,11 @@ TEST_CASE("loopback: a whole env1 run over a pty equals the in-process float pip
       REQUIRE(node::observations_from(b, *obs) == Status::kOk);
       REQUIRE(ref->step(*obs, *res) == Status::kOk);
       ++scans;
-      for (int i = 0; i < res->count; ++i) {
-        const proto::PairingWire& q = r.result.pairs[static_cast<std::size_t>(i)];
-        const bool same = static_cast<int>(q.outcome) == static_cast<int>(res->outcome[i]) &&
-                          (q.feature_id >= 0 ? q.feature_id == res->feature[i] : res->feature[i] == -1) &&
-                          bits(q.d2) == bits(res->d2[i]);
-        mismatches += !same;
-        pairs += q.outcome == proto::PairingOutcome::kPaired;
-      }
-      const ekf::Slam<float, DesktopBounds>& sl = ref->slam();
-      const float mine[] = {sl.x(0),      sl.x(1),      sl.x(2),      sl.cov(0, 0), sl.cov(0, 1),
-                            sl.cov(0, 2), sl.cov(1, 1), sl.cov(1, 2), sl.cov(2, 2)};
-      const float theirs[] = {r.pose.x_m,          r.pose.y_m,          r.pose.theta_rad,
-                              r.pose.cov_upper[0], r.pose.cov_upper[1], r.pose.cov_upper[2],
-                              r.pose.cov_upper[3], r.pose.cov_upper[4], r.pose.cov_upper[5]};
-      for (int k = 0; k < 9; ++k) mismatches += bits(mine[k]) != bits(theirs[k]);
-      mismatches += r.pose.landmark_count != sl.landmarks();
+      const test::ReplyCheck c = test::check_reply(r, *res, ref->slam());
+      mismatches += c.mismatches;
+      pairs += c.paired;
     };
-    const RunResult run = stream_scenario(link, sc, 3, s, o, hook);
+    const RunResult run = stream_scenario(link, sc, 3, o, hook);
     CHECK(scans == 737);
     CHECK(run.scans == 737);
     CHECK(pairs > 3000);
@@ -138,7 +121,7 @@ TEST_CASE("loopback: periodic STATS reach last_stats() between replies, and SHUT
     CHECK_THROWS_WITH_AS(link.shutdown(3), doctest::Contains("not-ready"), LinkError);  // not before HELLO
     link.hello();
     CHECK_FALSE(link.last_stats().has_value());
-    proto::Config c = link_config(sc, Strategy::kGeojcbb, RunOptions{});
+    proto::Config c = link_config(sc, RunOptions{});
     c.stats_period_scans = 10;
     link.configure(c);
     link.reset(link_reset(sc));

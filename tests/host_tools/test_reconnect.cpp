@@ -142,7 +142,7 @@ Run stream(TestDevice& dev, int window, const std::function<void(int)>& disturb,
   LinkSession session(so);
   SimSource src(sc, 3);
   RunOptions o;
-  o.strategy = Strategy::kGeojcbb;
+  o.step.strategy = Strategy::kGeojcbb;
   StreamOptions st;
   st.window = window;
   int scans = 0;

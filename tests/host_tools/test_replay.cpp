@@ -151,7 +151,7 @@ TEST_CASE("replay: the raw MRCLAM log gives the noise from its labelled data") {
   CHECK(n.sigma_w_radps == doctest::Approx(m.sigma_w_radps));
   replay::LogSource src(raw, n);
   RunOptions o;
-  o.strategy = Strategy::kGeojcbb;
+  o.step.strategy = Strategy::kGeojcbb;
   const RunResult r = run_inputs(src, o);
   CHECK(r.scans > 100);
   CHECK(r.observations == r.score.tp + r.score.tn + r.score.fp + r.score.fn);
@@ -192,7 +192,7 @@ TEST_CASE("replay: a hand-made log, its labels, noise and start") {
   CHECK(src.x0.x == 0.0);
   CHECK(src.sensor.max_range_m == 20.0);
   RunOptions o;
-  o.strategy = Strategy::kJcbb;
+  o.step.strategy = Strategy::kJcbb;
   const RunResult r = run_inputs(src, o);
   CHECK(r.scans == 10);
   CHECK(r.observations == 20);
@@ -313,7 +313,7 @@ TEST_CASE("replay: mutated logs are read, replayed or refused, never a crash") {
       ++read;
       replay::LogSource src(log, n);
       RunOptions o;
-      o.strategy = k % 2 ? Strategy::kGeojcbb : Strategy::kJcbb;
+      o.step.strategy = k % 2 ? Strategy::kGeojcbb : Strategy::kJcbb;
       const RunResult r = run_inputs(src, o);
       CHECK(r.observations == r.score.tp + r.score.tn + r.score.fp + r.score.fn);
       ++replayed;

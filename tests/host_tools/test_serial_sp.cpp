@@ -106,7 +106,7 @@ Session session(bool libserialport) {
   s.capabilities = bytes_of(link.hello());
   RunOptions o;
   o.max_steps = 120;
-  s.run = stream_scenario(link, sc, 5, Strategy::kGeojcbb, o, [&](const LinkObsBatch&, const LinkClient::ScanReply& r) {
+  s.run = stream_scenario(link, sc, 5, o, [&](const LinkObsBatch&, const LinkClient::ScanReply& r) {
     s.replies.push_back(bytes_of(r.result));
     s.replies.push_back(bytes_of(r.pose));
   });

@@ -22,9 +22,9 @@ TEST_CASE("noise-free env1: every strategy scores F1 = 1 and stays on the truth"
   s.clutter_per_scan = 0.0;
   for (int k = 0; k <= kStrategyCount; ++k) {  // the last round: association by ground truth
     RunOptions o;
-    o.strategy = static_cast<Strategy>(k % kStrategyCount);
+    o.step.strategy = static_cast<Strategy>(k % kStrategyCount);
     o.oracle = k == kStrategyCount;
-    CAPTURE(to_string(o.strategy));
+    CAPTURE(to_string(o.step.strategy));
     CAPTURE(o.oracle);
     const RunResult r = run_slam(s, 1, o);
     CHECK(r.scans > 500);

@@ -62,6 +62,23 @@ inline Config sample<Config>() {
   c.confirm_hits = 2;
   c.max_misses = 4;
   c.max_tentative_reviews = 6;
+  c.joint_recheck = false;
+  c.ambiguity_margin = 2.5f;
+  c.new_if_candidates_taken = true;
+  c.verify = true;
+  c.full_covariance_check = true;
+  c.papers_em = true;
+  c.seed_min_position_var_m2 = 3.0f;
+  c.consistency_wide_d2 = 20.0f;
+  c.consistency_pair_d2 = 9.0f;
+  c.rjc = true;
+  c.rjc_tries = 5;
+  c.rjc_subset = 6;
+  c.occlusion_rad = 0.03f;
+  c.miss_probability = 1e-5f;
+  c.static_gate_level = 0.95f;
+  c.first_estimates_jacobians = false;
+  c.augment = false;
   c.stats_period_scans = 0x1234;
   return c;
 }

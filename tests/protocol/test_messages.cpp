@@ -263,7 +263,27 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     c.dbscan_min_points = 0;
     rejects(c, Error::kOutOfRange);
     c = ok;
-    c.node_budget = 0;
+    c.node_budget = 0;  // the device's capacity
+    rejects(c, Error::kOk);
+    c = ok;
+    c.ambiguity_margin = -0.5f;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.seed_min_position_var_m2 = 0.0f;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.rjc_tries = 0;
+    rejects(c, Error::kOutOfRange);
+    c.rjc_tries = 65;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.occlusion_rad = -0.01f;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.miss_probability = 1.0f;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.static_gate_level = 1.0f;
     rejects(c, Error::kOutOfRange);
     c = ok;
     c.min_range_m = -0.1f;
@@ -418,22 +438,23 @@ TEST_CASE("protocol: ranges and positive definiteness") {
 }
 
 TEST_CASE("protocol: SHUTDOWN and CONFIG's periodic STATS on the wire") {
-  // CONFIG's last field, after the 39 bytes of the first version.
+  // CONFIG's last field, after the 77 bytes of the step's options.
   const std::vector<SchemaField> cf = schema_fields(MsgType::kConfig);
   REQUIRE(cf.back().name == "stats_period_scans");
   CHECK(cf.back().type == "u16");
-  CHECK(cf.back().offset == 39);
+  CHECK(cf.back().offset == 77);
   Config c = sample<Config>();
   c.stats_period_scans = 0x0102;
   const Bytes pl = payload_of(c);
-  REQUIRE(pl.size() == 41);
-  CHECK(pl[39] == 0x02);
-  CHECK(pl[40] == 0x01);
+  REQUIRE(pl.size() == 79);
+  CHECK(pl[77] == 0x02);
+  CHECK(pl[78] == 0x01);
   CHECK(Config{}.stats_period_scans == 0);  // off unless asked for
   Config out{};
   REQUIRE(out.decode(pl.data(), pl.size()) == Error::kOk);
   CHECK(out.stats_period_scans == 0x0102);
-  CHECK(out.decode(pl.data(), 39) == Error::kBadLength);  // a first-version CONFIG is refused
+  CHECK(out.decode(pl.data(), 77) == Error::kBadLength);
+  CHECK(out.decode(pl.data(), 41) == Error::kBadLength);  // a CONFIG of the 16-field schema is refused
   // SHUTDOWN: type 0x09, one byte, any exit code.
   CHECK(static_cast<std::uint8_t>(Shutdown::kType) == 0x09);
   CHECK(is_known_type(0x09));

@@ -12,19 +12,19 @@ static int32_t ids[GEOJCBB_MAX_CANDIDATES];
 static float h[2 * GEOJCBB_MAX_CANDIDATES], C[4 * GEOJCBB_MAX_CANDIDATES * GEOJCBB_MAX_CANDIDATES];
 
 int main(void) {
-  geojcbb_strategy_params p;
+  geojcbb_settings p;
   geojcbb_associator* a = 0;
-  geojcbb_slam_settings st;
+  geojcbb_settings st;
   geojcbb_slam* s = 0;
   const float x0[3] = {0.f, 0.f, 0.f}, P0[9] = {1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f};
   float x[3], xy[2];
   int32_t id = 0;
-  geojcbb_strategy_params_default(&p);
+  geojcbb_settings_default(&p);
   p.local_radius_m = 12.f;
-  if (geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, GEOJCBB_STRATEGY_GEOJCBB, &p, &a) != GEOJCBB_OK) return 1;
+  if (geojcbb_associator_init(&assoc_mem, sizeof assoc_mem, &p, &a) != GEOJCBB_OK) return 1;
   if (geojcbb_associate(a, 1, z, R, 1, ids, h, C, &assoc_out) != GEOJCBB_OK) return 2;
-  geojcbb_slam_settings_default(&st);
-  st.params.local_radius_m = 12.f;
+  geojcbb_settings_default(&st);
+  st.local_radius_m = 12.f;
   st.max_range_m = 10.f;
   st.half_fov_rad = 1.f;
   if (geojcbb_slam_init(&slam_mem, sizeof slam_mem, &s) != GEOJCBB_OK) return 3;

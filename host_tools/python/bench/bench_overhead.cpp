@@ -36,7 +36,7 @@ bool read_scene(std::istream& in, State& s, AssociationConfig<double, PyBounds>&
   Strategy strategy = Strategy::kGeojcbb;
   for (int k = 0; k < kStrategyCount; ++k)
     if (name == to_string(static_cast<Strategy>(k))) strategy = static_cast<Strategy>(k);
-  StrategyParams<double> p;
+  StepSettings<double> p;
   p.local_radius_m = radius;
   st = make_strategy(strategy, p, cfg);
   s.obs.count = m;

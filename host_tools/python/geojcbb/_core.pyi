@@ -11,7 +11,8 @@ MAX_CANDIDATES: int  # 128
 MAX_GROUPS: int  # 8
 MAX_JCBB_NODES: int  # 200000
 MAX_LANDMARKS: int  # 500
-STRATEGIES: List[str]  # ["ICNN", "JCBB", "KJCBB", "DFJCBB", "GEMJCBB", "GEOJCBB"]
+STRATEGIES: List[str]  # ["ICNN", "JCBB", "KJCBB", "DFJCBB", "GEMJCBB", "GEOJCBB", "PCJCBB"]
+OPTIONS: List[Dict[str, str]]  # the option table (core/options.h): name, type, default, unit, meaning
 
 
 class GeojcbbError(RuntimeError):
@@ -33,6 +34,43 @@ class Diagnostics(TypedDict):
     declined: int
 
 
+class Options(TypedDict, total=False):
+    """The keyword options of associate() and Slam(), one per line of the option table
+    (firmware_lib/include/geojcbb/core/options.h; docs/options.md gives ranges and meanings).
+    tests/test_geojcbb.py keeps this list equal to OPTIONS."""
+    confidence: float  # default 0.99
+    new_landmark_level: float  # default 0.999
+    local_radius_m: float  # default 10
+    groups: int  # default 3
+    condition_groups: bool  # default 0
+    dbscan_eps_m: float  # default 1.5
+    dbscan_min_points: int  # default 2
+    node_budget: int  # default 0
+    min_range_m: float  # default 0
+    max_range_m: float  # default 10
+    half_fov_rad: float  # default 3.14159265358979
+    confirm_hits: int  # default 2
+    max_misses: int  # default 2
+    max_tentative_reviews: int  # default 10
+    joint_recheck: bool  # default 1
+    ambiguity_margin: float  # default 0
+    new_if_candidates_taken: bool  # default 0
+    verify: bool  # default 0
+    full_covariance_check: bool  # default 0
+    papers_em: bool  # default 0
+    seed_min_position_var_m2: float  # default 4
+    consistency_wide_d2: float  # default 23.025850929940457
+    consistency_pair_d2: float  # default 10.827566170662733
+    rjc: bool  # default 0
+    rjc_tries: int  # default 8
+    rjc_subset: int  # default 8
+    occlusion_rad: float  # default 0
+    miss_probability: float  # default 0
+    static_gate_level: float  # default 0
+    first_estimates_jacobians: bool  # default 1
+    augment: bool  # default 1
+
+
 class AssociationResult(TypedDict):
     feature: npt.NDArray[np.int32]  # (m,) feature id, NEW_FEATURE or UNMATCHED
     candidate: npt.NDArray[np.int32]  # (m,) index into h/ids, or -1
@@ -47,9 +85,7 @@ def associate(z: npt.ArrayLike, R: npt.ArrayLike, h: npt.ArrayLike, C: npt.Array
               strategy: str = "GEOJCBB", **options: Any) -> AssociationResult:
     """z (m, 2) [m, rad], R (m, 2, 2) [m^2, rad^2], h (n, 2) [m, rad], C (2n, 2n), ids (n,) >= 0.
 
-    Options: confidence, local_radius_m [m], groups, dbscan_eps_m [m], dbscan_min_points,
-    joint_recheck, condition_groups, node_budget, ambiguity_margin, new_if_candidates_taken,
-    verify, seed_min_position_var_m2 [m^2], consistency_wide_d2, consistency_pair_d2.
+    strategy: one of STRATEGIES, optionally with "+V". options: keywords of Options.
     Raises GeojcbbError with .status on bad input, TypeError on an unknown option.
     """
 
@@ -64,10 +100,8 @@ class StepResult(TypedDict):
 class Slam:
     """One EKF-SLAM step with data association (node::SlamStep<double, host bounds>)."""
 
-    def __init__(self, strategy: str = "GEOJCBB", *, local_radius_m: float, max_range_m: float,
-                 half_fov_rad: float = 3.14159265358979, min_range_m: float = 0.0,
-                 new_landmark_level: float = 0.999, augment: bool = True,
-                 first_estimates_jacobians: bool = True, **options: Any) -> None: ...
+    def __init__(self, strategy: str = "GEOJCBB", **options: Any) -> None:
+        """strategy: one of STRATEGIES, optionally with "+V". options: keywords of Options."""
     def reset(self, x0: npt.ArrayLike, P0: npt.ArrayLike) -> None:
         """x0 = (x [m], y [m], theta [rad]); P0 (3, 3) [m^2, rad^2]."""
     def predict(self, v_mps: float, w_radps: float, dt_s: float, sigma_v_mps: float, sigma_w_radps: float) -> None: ...

@@ -96,7 +96,7 @@ def test_every_bad_input_raises_its_status():
     assert status_of(assoc(ids=-ids)) == "kInvalidInput"
     assert status_of(assoc(z=z[:, :1])) == "kInvalidInput"  # shape
     assert status_of(assoc(strategy="NOPE")) == "kInvalidInput"
-    assert status_of(assoc(strategy="GEOJCBB")) == "kInvalidInput"  # r + d missing
+    assert status_of(assoc(strategy="GEOJCBB", local_radius_m=0.0)) == "kInvalidInput"  # r + d must be > 0
     assert status_of(assoc(confidence=1.5)) in ("kInvalidInput", "kNoConvergence")
     zz, RR, hh, CC, ii = make_scene(rng, 4, geojcbb.MAX_OBSERVATIONS + 1)
     assert status_of(lambda: geojcbb.associate(zz, RR, hh, CC, ii, strategy="JCBB")) == "kCapacityExceeded"
@@ -153,3 +153,30 @@ def test_example_writes_png(tmp_path):
     ex = os.path.join(HERE, "..", "examples", "plot_association.py")
     subprocess.run([sys.executable, ex, "--out", str(tmp_path / "a.png")], check=True, env=dict(os.environ))
     assert (tmp_path / "a.png").stat().st_size > 1000
+
+
+def test_options_are_the_table_and_the_stubs_list_them():
+    import ast
+    names = [o["name"] for o in geojcbb.OPTIONS]
+    assert names[0] == "strategy" and len(names) == len(set(names))
+    stub = ast.parse(open(os.path.join(os.path.dirname(geojcbb.__file__), "_core.pyi")).read())
+    cls = next(n for n in stub.body if isinstance(n, ast.ClassDef) and n.name == "Options")
+    stubbed = [n.target.id for n in cls.body if isinstance(n, ast.AnnAssign)]
+    assert stubbed == names[1:]
+    py = {"F64": "float", "REAL": "float", "F32": "float", "INT": "int", "U32": "int", "BOOL": "bool"}
+    types = {n.target.id: n.annotation.id for n in cls.body if isinstance(n, ast.AnnAssign)}
+    for o in geojcbb.OPTIONS[1:]:
+        assert types[o["name"]] == py[o["type"]], o["name"]
+    for o in geojcbb.OPTIONS[1:]:  # every option documented in both docstrings
+        assert o["name"] in geojcbb.associate.__doc__ and o["name"] in geojcbb.Slam.__init__.__doc__
+
+
+def test_every_option_is_a_keyword_and_its_range_is_enforced():
+    rng = np.random.default_rng(5)
+    z, R, h, C, ids = make_scene(rng, 4, 4)
+    geojcbb.associate(z, R, h, C, ids, strategy="JCBB+V", confidence=0.95, rjc=True, rjc_tries=4)
+    assert status_of(lambda: geojcbb.associate(z, R, h, C, ids, strategy="JCBB", rjc_tries=0)) == "kInvalidInput"
+    assert status_of(lambda: geojcbb.Slam("JCBB", miss_probability=1.0)) == "kInvalidInput"
+    geojcbb.Slam("jcbb+v", miss_probability=0.001, static_gate_level=0.99, occlusion_rad=0.03)
+    with pytest.raises(TypeError):
+        geojcbb.Slam("JCBB", strategy="ICNN")

@@ -37,7 +37,7 @@ AssociationConfig<T, B> jcbb_config(bool verify) {
 template <typename T>
 AssociationConfig<T, B> pcjcbb_config() {
   AssociationConfig<T, B> cfg;
-  REQUIRE(make_strategy(Strategy::kPcjcbb, StrategyParams<T>{}, cfg) == Status::kOk);
+  REQUIRE(make_strategy(Strategy::kPcjcbb, StepSettings<T>{}, cfg) == Status::kOk);
   return cfg;
 }
 
@@ -216,14 +216,14 @@ TEST_CASE_TEMPLATE("seed and verify: bad options and input give a status and lea
     expect(cfg, Status::kInvalidInput);
   }
   {
-    StrategyParams<T> sp;
+    StepSettings<T> sp;
     sp.seed_min_position_var_m2 = T(-1);
     AssociationConfig<T, B> cfg;
     CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
-    sp = StrategyParams<T>{};
+    sp = StepSettings<T>{};
     sp.consistency_pair_d2 = T(-1);
     CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
-    sp = StrategyParams<T>{};
+    sp = StepSettings<T>{};
     sp.consistency_wide_d2 = nan;
     CHECK(make_strategy(Strategy::kPcjcbb, sp, cfg) == Status::kInvalidInput);
   }
@@ -237,7 +237,7 @@ TEST_CASE_TEMPLATE("seed and verify: bad options and input give a status and lea
 TEST_CASE("PCJCBB: its name and its switches") {
   CHECK(std::string(to_string(Strategy::kPcjcbb)) == "PCJCBB");
   AssociationConfig<double, B> cfg;
-  REQUIRE(make_strategy(Strategy::kPcjcbb, StrategyParams<double>{}, cfg) == Status::kOk);
+  REQUIRE(make_strategy(Strategy::kPcjcbb, StepSettings<double>{}, cfg) == Status::kOk);
   CHECK(cfg.search == SearchMethod::kJcbb);
   CHECK(cfg.grouping == Grouping::kNone);
   CHECK(cfg.mutual_exclusion);
@@ -252,7 +252,7 @@ TEST_CASE("PCJCBB: its name and its switches") {
   CHECK(cfg.consistency.pair_d2 == doctest::Approx(ref.pair_d2).epsilon(1e-6));
   // The papers' presets are unchanged unless the verification is asked for.
   for (int k = 0; k < kPaperStrategyCount; ++k) {
-    StrategyParams<double> sp;
+    StepSettings<double> sp;
     sp.local_radius_m = 10;
     REQUIRE(make_strategy(static_cast<Strategy>(k), sp, cfg) == Status::kOk);
     CHECK_FALSE(cfg.verify);

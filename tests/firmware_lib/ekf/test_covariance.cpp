@@ -285,8 +285,10 @@ TEST_CASE("float SLAM over the whole env1 run: P symmetric and positive definite
   auto step = std::make_unique<node::SlamStep<float, LB>>();
   node::StepSettings<float> set;
   set.strategy = Strategy::kJcbb;
-  set.params.local_radius_m = float(sc.max_range_m + 5.0);
-  set.view = ekf::Visibility<float>{float(sc.min_range_m + 1), float(sc.max_range_m - 1), float(sc.fov_rad / 2), 0.0f};
+  set.local_radius_m = float(sc.max_range_m + 5.0);
+  set.min_range_m = float(sc.min_range_m + 1);
+  set.max_range_m = float(sc.max_range_m - 1);
+  set.half_fov_rad = float(sc.fov_rad / 2);
   REQUIRE(step->configure(set) == Status::kOk);
   REQUIRE(step->reset(Pose2<float>{float(sc.waypoints[0].x()), float(sc.waypoints[0].y()), 0.0f},
                       Mat3<float>::Identity() * 1e-6f) == Status::kOk);

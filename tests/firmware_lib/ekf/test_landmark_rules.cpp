@@ -121,9 +121,11 @@ TEST_CASE_TEMPLATE("two landmarks 0.15 m apart, the second first seen from near:
   auto step = std::make_unique<node::SlamStep<T, SB>>();
   node::StepSettings<T> s;
   s.strategy = Strategy::kGeojcbb;
-  s.params.local_radius_m = T(20);
-  s.params.new_if_candidates_taken = true;
-  s.view = Visibility<T>{T(0.3), T(15), T(1.0)};
+  s.local_radius_m = T(20);
+  s.new_if_candidates_taken = true;
+  s.min_range_m = T(0.3);
+  s.max_range_m = T(15);
+  s.half_fov_rad = T(1.0);
   REQUIRE(step->configure(s) == Status::kOk);
   REQUIRE(step->reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
   const Vec2<double> A(8, 0), Bp(8, 0.15);

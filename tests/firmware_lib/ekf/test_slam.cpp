@@ -379,12 +379,14 @@ TEST_CASE_TEMPLATE("SlamStep: configuration, outcomes, no allocation", T, float,
   REQUIRE(obs.push(Vec2<T>(T(4), T(0.1)), Mat2<T>(Vec2<T>(T(0.01), T(0.0003)).asDiagonal())) == Status::kOk);
   CHECK(s->step(obs, *res) == Status::kInvalidInput);  // not configured
   node::StepSettings<T> bad;
-  bad.params.local_radius_m = T(0);
+  bad.local_radius_m = T(0);
   CHECK(s->configure(bad) == Status::kInvalidInput);
   CHECK(!s->configured());
   node::StepSettings<T> ok;
-  ok.params.local_radius_m = T(15);
-  ok.view = ekf::Visibility<T>{T(0.5), T(10), T(1.4)};
+  ok.local_radius_m = T(15);
+  ok.min_range_m = T(0.5);
+  ok.max_range_m = T(10);
+  ok.half_fov_rad = T(1.4);
   REQUIRE(s->configure(ok) == Status::kOk);
   REQUIRE(s->reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
   // First scan: the map is empty, so the observation becomes landmark 0; the second scan pairs it.

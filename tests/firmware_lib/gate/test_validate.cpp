@@ -220,7 +220,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
     for (int preset = 0; preset < kStrategyCount; ++preset) {
       CAPTURE(seed);
       CAPTURE(preset);
-      StrategyParams<T> params;
+      StepSettings<T> params;
       params.local_radius_m = T(100);             // every candidate in the region
       params.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed (pairwise tests) on every scene
       AssociationConfig<T, B> cfg;
@@ -357,7 +357,7 @@ TEST_CASE_TEMPLATE("the full covariance check and the check where read give the 
     for (int preset = 0; preset < kStrategyCount; ++preset) {
       CAPTURE(seed);
       CAPTURE(preset);
-      StrategyParams<T> params;
+      StepSettings<T> params;
       params.local_radius_m = T(7);
       AssociationConfig<T, B> lazy, full;
       REQUIRE(make_strategy(static_cast<Strategy>(preset), params, lazy) == Status::kOk);

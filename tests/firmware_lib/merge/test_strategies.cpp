@@ -41,7 +41,7 @@ host::SceneParams heading_error_scene() {
 
 template <typename T, class B>
 AssociationConfig<T, B> strategy(Strategy s, bool recheck = true) {
-  StrategyParams<T> p;
+  StepSettings<T> p;
   p.local_radius_m = T(10);
   p.joint_recheck = recheck;
   AssociationConfig<T, B> cfg;

@@ -1,4 +1,4 @@
-// core: the six named strategies as presets of AssociationConfig (ARCHITECTURE.md's table).
+// core: the seven named strategies as presets of AssociationConfig (ARCHITECTURE.md's table).
 //   preset   local region  grouping  mutual exclusion  optimal criterion
 //   ICNN     no            none      no                -
 //   JCBB     no            none      no                no
@@ -6,73 +6,35 @@
 //   DFJCBB   no            DBSCAN    no                no
 //   GEMJCBB  yes           GMM-EM    no                no
 //   GEOJCBB  yes           GMM-EM    yes               yes
-//   PCJCBB   no            none      yes               yes   + verify + seed (ours, issue 12)
-// The joint re-check of merged hypotheses (our addition) is on by default in the grouped presets;
-// StrategyParams switches it off to reproduce the papers' methods exactly. PCJCBB ("pairwise
+//   PCJCBB   no            none      yes               yes   + verify + seed (ours)
+// A preset switches only the columns above (and PCJCBB's verify and seed); every other field of
+// AssociationConfig comes from the step's settings (core/settings.hpp, one line per option in
+// core/options.h). The joint re-check of merged hypotheses (our addition) is on by default in the
+// grouped presets; `joint_recheck` off reproduces the papers' methods exactly. PCJCBB ("pairwise
 // consistent JCBB") is not a paper's method: JCBB with exclusion and the optimal criterion, whose
 // answer is verified pairwise and which is seeded by the pose-free clique when the pose is
 // uncertain (docs/consistency.md). The verification can be switched into every other preset
-// (StrategyParams::verify).
+// (StepSettings::verify).
 #pragma once
 
 #include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/settings.hpp"
 
 namespace geojcbb {
 
-enum class Strategy : std::uint8_t { kIcnn, kJcbb, kKjcbb, kDfjcbb, kGemjcbb, kGeojcbb, kPcjcbb };
-constexpr int kStrategyCount = 7;
-/// The papers' six (ICNN .. GEOJCBB); PCJCBB is this project's preset (docs/consistency.md).
-constexpr int kPaperStrategyCount = 6;
-
-constexpr const char* to_string(Strategy s) {
-  switch (s) {
-    case Strategy::kIcnn: return "ICNN";
-    case Strategy::kJcbb: return "JCBB";
-    case Strategy::kKjcbb: return "KJCBB";
-    case Strategy::kDfjcbb: return "DFJCBB";
-    case Strategy::kGemjcbb: return "GEMJCBB";
-    case Strategy::kGeojcbb: return "GEOJCBB";
-    case Strategy::kPcjcbb: return "PCJCBB";
-  }
-  return "?";
-}
-
-template <typename T>
-struct StrategyParams {
-  double confidence = 0.99;  ///< chi-square level of the individual and joint tests
-  T local_radius_m = T(0);   ///< r + d (eq. 5); must be > 0 for GEMJCBB and GEOJCBB
-  int groups = 3;            ///< K for k-means and GMM-EM (the papers use 3 to 5); 0: BIC (EM)
-  T dbscan_eps_m = T(1.5);
-  int dbscan_min_points = 2;
-  bool joint_recheck = true;
-  bool condition_groups = false;         ///< our conditioned group search (AssociationConfig)
-  NodeCount node_budget = 0;             ///< 0: the capacity's MaxJcbbNodes
-  double ambiguity_margin = 0;           ///< AssociationConfig::ambiguity_margin (0: off)
-  bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
-  bool verify = false;                   ///< AssociationConfig::verify, switched into any preset (PCJCBB: always on)
-  /// AssociationConfig::covariance_check: true checks all of C before the stages (the behaviour
-  /// before issue 13, O(n^2)); false checks each entry where a stage reads it.
-  bool full_covariance_check = false;
-  /// GMM-EM as before issue 13: farthest-first start and the papers' stop rule (objective tolerance
-  /// only); false: the k-means start and the stop once the groups are stable (EmOptions).
-  bool papers_em = false;
-  /// AssociationConfig::seed_min_position_var_m2 (PCJCBB's seed trigger) [m^2]
-  T seed_min_position_var_m2 = T(4);
-  /// The consistency graph's wide gate, chi2inv(0.99999, 2) = -2 ln(1e-5), and its pairwise test,
-  /// chi2inv(0.999, 1), as thresholds rather than levels: a second chi2_inv inlined into
-  /// make_strategy took its frame over the controller's 512-byte limit (the values are checked
-  /// against chi2_inv in tests/firmware_lib/consistency/test_associate_consistency.cpp).
-  T consistency_wide_d2 = T(23.025850929940457);
-  T consistency_pair_d2 = T(10.827566170662733);
-};
-
-/// Builds a strategy's configuration.
-/// @return kOk; kInvalidInput when a grouped-region strategy has no radius or a parameter is out of
-///         range; kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
+/// Builds a strategy's configuration from the step's settings: the preset's switches, the rest from
+/// `p` (its strategy field is not read: `s` names the preset).
+/// @return kOk; kInvalidInput when an option is outside its range (core/options.h), over the Bounds'
+///         capacity (groups, node budget, RJC subset), or a grouped-region strategy has no radius;
+///         kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
 template <typename T, class B>
-[[nodiscard]] Status make_strategy(Strategy s, const StrategyParams<T>& p, AssociationConfig<T, B>& out) {
+[[nodiscard]] Status make_strategy(Strategy s, const StepSettings<T>& p, AssociationConfig<T, B>& out) {
   // Every check and quantile first, into small locals; `out` is then written field by field (a whole
   // AssociationConfig on the stack would take this frame over the controller's 512-byte limit).
+  if (!in_range(p) || p.groups > B::kMaxGroups || p.node_budget > B::kMaxJcbbNodes ||
+      (p.rjc && p.rjc_subset > B::kMaxObservations)) {
+    return Status::kInvalidInput;
+  }
   GateThresholds<T, B::kMaxObservations> gate;
   Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, gate);
   if (st != Status::kOk) return st;
@@ -80,15 +42,26 @@ template <typename T, class B>
   consistency.wide_d2 = p.consistency_wide_d2;
   consistency.pair_d2 = p.consistency_pair_d2;
   if (!consistency.valid()) return Status::kInvalidInput;
-  if (p.groups < 0 || p.groups > B::kMaxGroups || p.node_budget > B::kMaxJcbbNodes) {
+  const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
+  // RJC replaces one ungrouped JCBB search (jcbb/rjc.hpp): refused here rather than at every scan.
+  const bool grouped = region || s == Strategy::kKjcbb || s == Strategy::kDfjcbb;
+  if (p.rjc && (s == Strategy::kIcnn || grouped || p.ambiguity_margin > 0 ||
+                (p.node_budget != 0 && p.node_budget < static_cast<NodeCount>(p.rjc_tries)))) {
     return Status::kInvalidInput;
   }
-  const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
-  if (region && !(p.local_radius_m > T(0))) return Status::kInvalidInput;
-  if (!(p.seed_min_position_var_m2 > T(0))) return Status::kInvalidInput;
-  if (!(p.ambiguity_margin >= 0) || !(p.ambiguity_margin < 1e6)) return Status::kInvalidInput;
-  // The fields no preset sets get AssociationConfig's defaults, one by one (a default-constructed
-  // temporary would cost the frame as much as a local copy).
+  // The preset's switches.
+  out.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
+  out.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
+                 : s == Strategy::kDfjcbb ? Grouping::kDbscan
+                 : region                 ? Grouping::kGmmEm
+                                          : Grouping::kNone;
+  out.local_region = region;
+  out.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
+  out.verify = p.verify || s == Strategy::kPcjcbb;
+  out.seed = s == Strategy::kPcjcbb;
+  // The settings (fields no option reaches keep AssociationConfig's defaults, set one by one: a
+  // default-constructed temporary would cost the frame as much as a local copy).
   out.kmeans_max_iterations = kMaxKMeansIterations;
   out.em = EmOptions<T>{};
   out.em.stop = p.papers_em ? EmStop::kObjective : EmStop::kGroupsStable;
@@ -96,25 +69,16 @@ template <typename T, class B>
   out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
   out.order_fewest_candidates_first = true;
   out.seed_min_pairings = 3;
-  out.rjc = false;
-  out.rjc_tries = 8;
-  out.rjc_subset = 8;
+  out.rjc = p.rjc;
+  out.rjc_tries = p.rjc_tries;
+  out.rjc_subset = p.rjc_subset;
   out.rjc_seed = 1;
   out.gate = gate;
   out.consistency = consistency;
-  out.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
-  out.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
-                 : s == Strategy::kDfjcbb ? Grouping::kDbscan
-                 : region                 ? Grouping::kGmmEm
-                                          : Grouping::kNone;
-  out.local_region = region;
   out.local_radius_m = p.local_radius_m;
-  out.mutual_exclusion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
-  out.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
-  out.verify = p.verify || s == Strategy::kPcjcbb;
-  out.seed = s == Strategy::kPcjcbb;
   out.seed_min_position_var_m2 = p.seed_min_position_var_m2;
-  out.groups = p.groups == 0 && out.grouping != Grouping::kGmmEm ? 3 : p.groups;
+  // 0 (BIC) is GMM-EM's alone; k-means takes the default K.
+  out.groups = p.groups == 0 && out.grouping != Grouping::kGmmEm ? StepSettings<T>{}.groups : p.groups;
   out.dbscan_eps_m = p.dbscan_eps_m;
   out.dbscan_min_points = p.dbscan_min_points;
   out.joint_recheck = p.joint_recheck;

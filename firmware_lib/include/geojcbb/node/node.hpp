@@ -21,7 +21,9 @@
 
 #include <cstdint>
 #include <cstring>
+#include <tuple>
 #include <type_traits>
+#include <utility>
 
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb/protocol/protocol.hpp"
@@ -73,23 +75,121 @@ struct Output {
   void (*shutdown)(void* context, std::uint8_t exit_code) = nullptr;
 };
 
-/// CONFIG's fields as the SLAM step's settings (validated by SlamStep::configure).
+/// CONFIG's fields and the option table (core/options.h): CONFIG keeps its own fields (protocol/ sees
+/// only the standard library); each but the device's own stats_period_scans is an option of the
+/// same name, and the checks below tie them at compile time: the name exists in the table, the wire
+/// type suits the option's TYPE, and CONFIG's default is the table's. The two conversions below
+/// are the only code between the wire and the settings, generated from CONFIG's field list.
+namespace config_wire {
+
+constexpr int kFieldCount = static_cast<int>(std::tuple_size<decltype(proto::Config::fields())>::value);
+
+/// Index of field K's option, or -1 for a field of the device's own.
+template <std::size_t K>
+constexpr int option_of() {
+  return options::index_of(std::get<K>(proto::Config::fields()).name);
+}
+template <std::size_t K>
+constexpr bool device_only() {
+  return options::same_name(std::get<K>(proto::Config::fields()).name, "stats_period_scans");
+}
+
+/// The wire types each TYPE of the table travels as.
+template <class W>
+constexpr bool suits(const char* type) {
+  using options::same_name;
+  if (std::is_same<W, proto::StrategyCode>::value) return same_name(type, "STRATEGY");
+  if (std::is_same<W, float>::value) return same_name(type, "F64") || same_name(type, "REAL") || same_name(type, "F32");
+  if (std::is_same<W, bool>::value) return same_name(type, "BOOL");
+  if (std::is_same<W, std::uint8_t>::value) return same_name(type, "INT");
+  if (std::is_same<W, std::uint32_t>::value) return same_name(type, "U32");
+  return false;
+}
+
+using options::convert;
+
+template <std::size_t K>
+constexpr bool field_tied() {
+  constexpr auto f = std::get<K>(proto::Config::fields());
+  using W = std::remove_reference_t<decltype(proto::Config{}.*(f.member))>;
+  constexpr int i = option_of<K>();
+  if constexpr (i < 0) {
+    return device_only<K>();
+  } else {
+    constexpr StepSettings<float> d{};
+    constexpr proto::Config c{};
+    return suits<W>(options::kInfo[i].type) && c.*(f.member) == convert<W>(options::Member<i>::get(d));
+  }
+}
+template <std::size_t... K>
+constexpr bool all_tied(std::index_sequence<K...>) {
+  return (field_tied<K>() && ...);
+}
+static_assert(all_tied(std::make_index_sequence<kFieldCount>{}),
+              "each CONFIG field names an option of core/options.h, with a wire type that suits its TYPE and the "
+              "table's default (or is the device's own stats_period_scans)");
+
+template <std::size_t K>
+constexpr bool field_carries(int option) {
+  return option_of<K>() == option;
+}
+template <std::size_t... K>
+constexpr bool carries(int option, std::index_sequence<K...>) {
+  return (field_carries<K>(option) || ...);
+}
+
+template <std::size_t K, typename T>
+void to_settings(const proto::Config& m, StepSettings<T>& s) {
+  constexpr auto f = std::get<K>(proto::Config::fields());
+  constexpr int i = option_of<K>();
+  if constexpr (i >= 0) {
+    auto& v = options::Member<i>::get(s);
+    v = convert<std::remove_reference_t<decltype(v)>>(m.*(f.member));
+  }
+}
+template <std::size_t K, typename T>
+void to_config(const StepSettings<T>& s, proto::Config& m) {
+  constexpr auto f = std::get<K>(proto::Config::fields());
+  constexpr int i = option_of<K>();
+  if constexpr (i >= 0) {
+    auto& w = m.*(f.member);
+    w = convert<std::remove_reference_t<decltype(w)>>(options::Member<i>::get(s));
+  }
+}
+template <typename T, std::size_t... K>
+void settings_from(const proto::Config& m, StepSettings<T>& s, std::index_sequence<K...>) {
+  (to_settings<K>(m, s), ...);
+}
+template <typename T, std::size_t... K>
+void config_from(const StepSettings<T>& s, proto::Config& m, std::index_sequence<K...>) {
+  (to_config<K>(s, m), ...);
+}
+
+}  // namespace config_wire
+
+/// The option with this index (options::Index) is a CONFIG field: a device runs it as the host sets
+/// it. A host refuses to stream work to a device when an option the wire does not carry differs
+/// from its default.
+constexpr bool carried_by_config(int option) {
+  return config_wire::carries(option, std::make_index_sequence<config_wire::kFieldCount>{});
+}
+
+/// CONFIG's fields as the SLAM step's settings (validated by SlamStep::configure); an option CONFIG
+/// does not carry keeps its default.
 template <typename T, class B>
 StepSettings<T> settings_from(const proto::Config& m) {
   StepSettings<T> s;
-  s.strategy = static_cast<Strategy>(m.strategy);
-  s.params.confidence = m.confidence;
-  s.params.local_radius_m = static_cast<T>(m.local_radius_m);
-  s.params.groups = m.groups;
-  s.params.condition_groups = m.condition_groups;
-  s.params.dbscan_eps_m = static_cast<T>(m.dbscan_eps_m);
-  s.params.dbscan_min_points = m.dbscan_min_points;
-  s.params.node_budget = m.node_budget;  // over the device's capacity: refused by configure()
-  s.new_landmark_level = m.new_landmark_level;
-  s.view =
-      ekf::Visibility<T>{static_cast<T>(m.min_range_m), static_cast<T>(m.max_range_m), static_cast<T>(m.half_fov_rad)};
-  s.policy = ekf::LandmarkPolicy{m.confirm_hits, m.max_misses, m.max_tentative_reviews};
+  config_wire::settings_from(m, s, std::make_index_sequence<config_wire::kFieldCount>{});
   return s;
+}
+
+/// The settings as CONFIG (the host's side; stats_period_scans stays 0). Levels and real values are
+/// rounded to float32.
+template <typename T>
+proto::Config config_from(const StepSettings<T>& s) {
+  proto::Config m;
+  config_wire::config_from(s, m, std::make_index_sequence<config_wire::kFieldCount>{});
+  return m;
 }
 
 /// An OBS_BATCH as observations. @return kOk; kCapacityExceeded; kNonFinite (decode validated it).
@@ -194,7 +294,10 @@ class Node {
     switch (static_cast<proto::MsgType>(f.type)) {
       case proto::MsgType::kHello: e = serve<proto::Hello>(f); break;
       case proto::MsgType::kPing: e = serve<proto::Ping>(f); break;
-      case proto::MsgType::kConfig: e = serve<proto::Config>(f); break;
+      case proto::MsgType::kConfig:  // decoded into members: CONFIG and the settings are too large for a frame
+        e = take(f, rx_config_);
+        if (e == proto::Error::kOk) on_message(rx_config_);
+        break;
       case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
@@ -240,8 +343,9 @@ class Node {
 
   void on_message(const proto::Config& m) {
     if (!ready()) return;
-    const StepSettings<T> s = settings_from<T, B>(m);
-    const Status st = step_.configure(s);
+    settings_ = kDefaultSettings;  // an option CONFIG does not carry keeps its default
+    config_wire::settings_from(m, settings_, std::make_index_sequence<config_wire::kFieldCount>{});
+    const Status st = step_.configure(settings_);
     if (st != Status::kOk) {
       nack(st == Status::kInvalidInput ? proto::Error::kOutOfRange : proto::Error::kInternal);
       return;
@@ -407,8 +511,11 @@ class Node {
   Observations<T, B> obs_;
   StepResult<T, B> last_;
   ObsBatch rx_batch_;
-  AssocResult result_;  ///< the last batch's, kept for a retransmitted OBS_BATCH
-  proto::Pose pose_;    ///< likewise
+  static constexpr StepSettings<T> kDefaultSettings{};
+  proto::Config rx_config_;
+  StepSettings<T> settings_;  ///< CONFIG's settings, built here rather than on the stack
+  AssocResult result_;        ///< the last batch's, kept for a retransmitted OBS_BATCH
+  proto::Pose pose_;          ///< likewise
   proto::Decoder decoder_;
   proto::MessageCounters msg_counters_;
   proto::EncodedFrame frame_;

@@ -18,19 +18,8 @@
 
 namespace geojcbb::node {
 
-/// What the filter and the association need to know, besides the measurements.
-template <typename T>
-struct StepSettings {
-  Strategy strategy = Strategy::kGeojcbb;
-  StrategyParams<T> params;           ///< gates, r + d, groups, budget (core/strategy.hpp)
-  double new_landmark_level = 0.999;  ///< chi-square level of the augmentation gate
-  ekf::Visibility<T> view;            ///< where a mapped landmark is expected (for review)
-  ekf::LandmarkPolicy policy;
-  ekf::FilterOptions filter;  ///< how the filter linearises (applied at the next reset)
-  /// Off: observations with no compatible candidate never become landmarks (a known, fixed map:
-  /// localisation only); they are reported kNewDropped.
-  bool augment = true;
-};
+/// The step's settings: every option of core/options.h (core/settings.hpp).
+using geojcbb::StepSettings;
 
 /// Per observation of a scan, what became of it.
 enum class Outcome : std::uint8_t {
@@ -70,22 +59,24 @@ class SlamStep {
   ///         make_strategy / chi2_inv. No state change unless kOk.
   [[nodiscard]] Status configure(const StepSettings<T>& s) {
     AssociationConfig<T, B> cfg;
-    Status st = make_strategy(s.strategy, s.params, cfg);
+    Status st = make_strategy(s.strategy, s, cfg);  // every option's range, besides the preset
     if (st != Status::kOk) return st;
     double gate = 0;
     st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
-    const ekf::Visibility<T>& v = s.view;
-    if (!s.policy.valid() || !(v.min_range_m >= T(0)) || !(v.max_range_m > v.min_range_m) ||
-        !std::isfinite(v.max_range_m) || !(v.half_fov_rad > T(0)) || !std::isfinite(v.half_fov_rad) ||
-        !(std::isfinite(s.params.local_radius_m) && s.params.local_radius_m > T(0))) {
-      return Status::kInvalidInput;
+    double static_gate = 0;  // 0: the static-gate rule off
+    if (s.static_gate_level > 0) {
+      st = chi2_inv(s.static_gate_level, 2, static_gate);
+      if (st != Status::kOk) return st;
     }
+    const ekf::LandmarkPolicy policy{s.confirm_hits, s.max_misses, s.max_tentative_reviews, s.miss_probability,
+                                     static_cast<float>(static_gate)};
+    if (!policy.valid()) return Status::kInvalidInput;
     cfg_ = cfg;
     gate_ = static_cast<T>(gate);
-    view_ = s.view;
-    policy_ = s.policy;
-    filter_ = s.filter;
+    view_ = ekf::Visibility<T>{s.min_range_m, s.max_range_m, s.half_fov_rad, s.occlusion_rad};
+    policy_ = policy;
+    filter_.first_estimates_jacobians = s.first_estimates_jacobians;
     augment_ = s.augment;
     configured_ = true;
     return Status::kOk;

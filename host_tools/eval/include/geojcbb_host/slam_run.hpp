@@ -21,8 +21,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
+#include "geojcbb/core/settings.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
 #include "geojcbb_host/scene.hpp"
@@ -30,28 +32,20 @@
 
 namespace geojcbb::host {
 
+/// A run's settings: the SLAM step's (one StepSettings, every option of core/options.h) and what only
+/// the host knows. step_settings() applies the host's fields to the step's: the in-process filter and
+/// a device over the link are configured from its result, so both run the same settings.
 struct RunOptions {
-  Strategy strategy = Strategy::kGeojcbb;
-  double confidence = 0.99;          ///< chi-square level of the individual and joint gates
-  double new_landmark_gate = 0.999;  ///< second gate for augmentation (chi-square level, 2 dof)
-  double compensation_m = 5.0;       ///< d in r + d (eq. 5); r is the scenario's max range
-  int groups = 3;                    ///< K for k-means / GMM-EM
-  bool condition_groups = false;
-  NodeCount node_budget = 0;             ///< JCBB nodes per scan (0: the capacity's MaxJcbbNodes)
-  int max_steps = 0;                     ///< stop after this many control intervals (0: the whole path)
-  ekf::LandmarkPolicy landmark_policy;   ///< tentative landmarks (confirm / remove)
-  ekf::FilterOptions filter;             ///< linearisation (first-estimates Jacobians)
-  double ambiguity_margin = 0;           ///< AssociationConfig::ambiguity_margin (0: off)
-  bool new_if_candidates_taken = false;  ///< AssociationConfig::new_if_candidates_taken
-  bool verify = false;                   ///< AssociationConfig::verify in any preset (PCJCBB: always)
-  double seed_min_position_var_m2 = 4;   ///< PCJCBB's seed trigger (AssociationConfig) [m^2]
-  double static_gate_level = 0;          ///< chi-square level of LandmarkPolicy::static_gate_d2 (0: off)
+  /// The step's options. local_radius_m, min_range_m, max_range_m and half_fov_rad are replaced by
+  /// step_settings() from the run's sensor (r + d and the view below); the rest are used as set.
+  StepSettings<double> step;
+  double compensation_m = 5.0;  ///< d in r + d (eq. 5); r is the sensor's max range
+  double view_margin_m = 1.0;   ///< a landmark within this of the range limits is not expected
+  int max_steps = 0;            ///< stop after this many control intervals (0: the whole path)
   /// Known-map mode (localisation only): these true landmarks (index = truth) are the map from the
   /// start, with std known_map_sigma_m, and nothing is added or removed. Empty: SLAM.
   std::vector<Eigen::Vector2d> known_map;
   double known_map_sigma_m = 0.01;
-  double view_margin_m = 1.0;  ///< a landmark within this of the range limits is not expected
-  double occlusion_rad = 0;    ///< ekf::Visibility::occlusion_rad (0: off)
   /// Optional: true landmark -> group, for RunResult::group_score (landmarks
   /// too close together for geometry to tell apart share a group). Empty:
   /// group_score equals score.
@@ -60,6 +54,13 @@ struct RunOptions {
   /// own accuracy with perfect association, a reference for the strategies.
   bool oracle = false;
 };
+
+struct SensorModel;
+
+/// The step's settings of a run with this sensor: opt.step with r + d = max range + compensation,
+/// the view from the sensor's limits less the margin (and the FOV less 3 bearing sigma), and in
+/// known-map mode augmentation off with every landmark rule at its default but confirm_hits = 1.
+StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sensor);
 
 struct MapLandmark {
   double x, y;
@@ -79,11 +80,17 @@ struct Method {
     return oracle ? "TRUTH" : verify ? kVerified[static_cast<int>(strategy)] : to_string(strategy);
   }
   void apply(RunOptions& o) const {
-    o.strategy = strategy;
+    o.step.strategy = strategy;
     o.oracle = oracle;
-    o.verify = o.verify || verify;
+    o.step.verify = o.step.verify || verify;
   }
 };
+
+/// The tools' one strategy-list parser (geojcbb_eval, geojcbb_link, geojcbb_qemu, the benchmarks):
+/// each name read by parse_strategy (case-insensitive; "+V" switches the verification in, e.g.
+/// "JCBB+V"), in the order given; no names: every preset (`all_presets`) or the papers' six. `oracle`
+/// appends the TRUTH row. Throws std::invalid_argument naming an unknown strategy.
+std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
 struct StepRecord {
   double t_s;

@@ -17,21 +17,24 @@
 
 namespace geojcbb::host {
 
-/// CONFIG for a sensor and the evaluation's options (the same settings SlamSession derives).
-/// Strategies by name (case-insensitive), in the tables' order; no names: all six. Throws
-/// std::invalid_argument naming an unknown one.
-std::vector<Strategy> select_strategies(const std::vector<std::string>& names);
-
 /// The score table the link programs print (geojcbb_link, geojcbb_qemu): a header, then one row per
 /// strategy with TP/TN/FP/FN, precision, recall, F1, mean absolute x/y error and scans/s; `extra`
 /// is a last column (its title in the header, its text in a row).
 void print_score_header(const char* extra = "");
-void print_score_row(Strategy s, const RunResult& r, double scans_per_s, const std::string& extra = "");
+void print_score_row(const std::string& name, const RunResult& r, double scans_per_s, const std::string& extra = "");
 /// A device's STATS as one line: frames and rejections by cause, scans, budget hits, stack.
 std::string describe_stats(const proto::Stats& st);
 
-proto::Config link_config(const SensorModel& sensor, Strategy s, const RunOptions& o);
-proto::Config link_config(const Scenario& sc, Strategy s, const RunOptions& o);
+/// CONFIG for a sensor and a run's settings: the step settings SlamSession is configured with
+/// (step_settings), as CONFIG carries them (node::config_from: levels and real values as float32).
+/// Throws std::invalid_argument before anything is sent, naming the setting, when the run cannot be
+/// carried: a known map (CONFIG carries no landmarks), an option CONFIG does not carry set away from
+/// its default, or an option outside its range.
+proto::Config link_config(const SensorModel& sensor, const RunOptions& o);
+proto::Config link_config(const Scenario& sc, const RunOptions& o);
+/// Throws std::invalid_argument naming the setting when CONFIG asks more than the device holds
+/// (groups, node budget, RJC subset over its capacities): refused, not clamped.
+void check_capacity(const proto::Config& c, const proto::Capabilities& caps);
 /// RESET at x0 with P0, each diagonal element at least 1e-6 (the float filter's floor).
 proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0);
 proto::Reset link_reset(const Scenario& sc);
@@ -98,7 +101,7 @@ struct StreamOptions {
 RunResult stream_run(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so = {});
 
 /// stream_run over one seed of a simulated scenario (window 1).
-RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, Strategy s, const RunOptions& o,
+RunResult stream_scenario(LinkClient& link, const Scenario& sc, std::uint64_t seed, const RunOptions& o,
                           const ScanHook& hook = nullptr);
 
 }  // namespace geojcbb::host

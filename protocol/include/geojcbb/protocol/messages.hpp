@@ -154,8 +154,12 @@ enum class StrategyCode : std::uint8_t {
 };
 constexpr std::uint8_t kStrategyCodeCount = 7;
 
-/// CONFIG, host -> device (acknowledged): association strategy, gates, sensor model and landmark
-/// policy. Domain checks only; the device also checks its capacities (groups, node budget).
+/// CONFIG, host -> device (acknowledged): the SLAM step's settings. Each field but
+/// stats_period_scans is an option of firmware_lib's option table (core/options.h) by the same name;
+/// node/node.hpp ties them at compile time (name, type, default), and a host refuses to send work to
+/// a device when a setting it cannot carry differs from its default. Levels and real values travel
+/// as float32. Domain checks only; the device also checks its capacities (groups, node budget) and
+/// every option's range (SlamStep::configure).
 struct Config : Codec<Config> {
   static constexpr MsgType kType = MsgType::kConfig;
   static constexpr const char* kName = "CONFIG";
@@ -167,15 +171,32 @@ struct Config : Codec<Config> {
   float local_radius_m = 10.0f;       ///< local region radius r + d, > 0
   std::uint8_t groups = 3;            ///< K for k-means / GMM-EM (0: chosen by BIC)
   bool condition_groups = false;
-  float dbscan_eps_m = 1.5f;               ///< > 0
-  std::uint8_t dbscan_min_points = 2;      ///< >= 1
-  std::uint32_t node_budget = 4000;        ///< JCBB nodes per scan, >= 1
-  float min_range_m = 0.0f;                ///< >= 0
-  float max_range_m = 10.0f;               ///< > min_range_m
-  float half_fov_rad = kPiF;               ///< (0, pi]
-  std::uint8_t confirm_hits = 2;           ///< hits that confirm a tentative landmark, >= 1
-  std::uint8_t max_misses = 3;             ///< misses in view that remove a tentative landmark, >= 1
-  std::uint8_t max_tentative_reviews = 5;  ///< reviews a landmark may stay tentative, >= 1
+  float dbscan_eps_m = 1.5f;                ///< > 0
+  std::uint8_t dbscan_min_points = 2;       ///< >= 1
+  std::uint32_t node_budget = 0;            ///< JCBB nodes per scan (0: the device's capacity)
+  float min_range_m = 0.0f;                 ///< >= 0
+  float max_range_m = 10.0f;                ///< > min_range_m
+  float half_fov_rad = kPiF;                ///< (0, pi]
+  std::uint8_t confirm_hits = 2;            ///< hits that confirm a tentative landmark, >= 1
+  std::uint8_t max_misses = 2;              ///< misses in view that remove a tentative landmark, >= 1
+  std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
+  bool joint_recheck = true;
+  float ambiguity_margin = 0.0f;  ///< >= 0 (0: off)
+  bool new_if_candidates_taken = false;
+  bool verify = false;
+  bool full_covariance_check = false;
+  bool papers_em = false;
+  float seed_min_position_var_m2 = 4.0f;            ///< > 0
+  float consistency_wide_d2 = 23.025850929940457f;  ///< > 0
+  float consistency_pair_d2 = 10.827566170662733f;  ///< > 0
+  bool rjc = false;
+  std::uint8_t rjc_tries = 8;      ///< 1 .. 64
+  std::uint8_t rjc_subset = 8;     ///< >= 1
+  float occlusion_rad = 0.0f;      ///< [0, pi]
+  float miss_probability = 0.0f;   ///< [0, 1)
+  float static_gate_level = 0.0f;  ///< [0, 1)
+  bool first_estimates_jacobians = true;
+  bool augment = true;
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -183,7 +204,7 @@ struct Config : Codec<Config> {
   static constexpr auto fields() {
     return std::make_tuple(
         field("strategy", &Config::strategy, range::between(0, kStrategyCodeCount - 1), "",
-              "0 ICNN, 1 JCBB, 2 KJCBB, 3 DFJCBB, 4 GEMJCBB, 5 GEOJCBB"),
+              "0 ICNN, 1 JCBB, 2 KJCBB, 3 DFJCBB, 4 GEMJCBB, 5 GEOJCBB, 6 PCJCBB"),
         field("confidence", &Config::confidence, range::interval(0.0f, 1.0f, true, true), "",
               "chi-square level of the compatibility tests"),
         field("new_landmark_level", &Config::new_landmark_level, range::interval(0.0f, 1.0f, true, true), "",
@@ -193,8 +214,8 @@ struct Config : Codec<Config> {
         field("condition_groups", &Config::condition_groups, range::one_of(0, 1)),
         field("dbscan_eps_m", &Config::dbscan_eps_m, range::above(0.0f), "m"),
         field("dbscan_min_points", &Config::dbscan_min_points, range::at_least(1)),
-        field("node_budget", &Config::node_budget, range::at_least(1), "nodes",
-              "JCBB nodes per scan; the device checks ≤ its `max_jcbb_nodes`"),
+        field("node_budget", &Config::node_budget, range::any(), "nodes",
+              "JCBB nodes per scan, 0: the device's `max_jcbb_nodes`; the device checks ≤ it"),
         field("min_range_m", &Config::min_range_m, range::not_below(0.0f), "m"),
         field("max_range_m", &Config::max_range_m, range::finite(), "m", "> `min_range_m`"),
         field("half_fov_rad", &Config::half_fov_rad, range::interval(0.0f, kPiF, true, false), "rad"),
@@ -203,6 +224,23 @@ struct Config : Codec<Config> {
               "misses in view that remove a tentative landmark"),
         field("max_tentative_reviews", &Config::max_tentative_reviews, range::at_least(1), "",
               "reviews a landmark may stay tentative"),
+        field("joint_recheck", &Config::joint_recheck, range::one_of(0, 1)),
+        field("ambiguity_margin", &Config::ambiguity_margin, range::not_below(0.0f), "", "0: off"),
+        field("new_if_candidates_taken", &Config::new_if_candidates_taken, range::one_of(0, 1)),
+        field("verify", &Config::verify, range::one_of(0, 1), "", "pairwise verification (PCJCBB: always)"),
+        field("full_covariance_check", &Config::full_covariance_check, range::one_of(0, 1)),
+        field("papers_em", &Config::papers_em, range::one_of(0, 1)),
+        field("seed_min_position_var_m2", &Config::seed_min_position_var_m2, range::above(0.0f), "m^2"),
+        field("consistency_wide_d2", &Config::consistency_wide_d2, range::above(0.0f)),
+        field("consistency_pair_d2", &Config::consistency_pair_d2, range::above(0.0f)),
+        field("rjc", &Config::rjc, range::one_of(0, 1)), field("rjc_tries", &Config::rjc_tries, range::between(1, 64)),
+        field("rjc_subset", &Config::rjc_subset, range::at_least(1), "", "the device checks ≤ its `max_observations`"),
+        field("occlusion_rad", &Config::occlusion_rad, range::interval(0.0f, kPiF, false, false), "rad", "0: off"),
+        field("miss_probability", &Config::miss_probability, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
+        field("static_gate_level", &Config::static_gate_level, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
+        field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
+              "applied at the next RESET"),
+        field("augment", &Config::augment, range::one_of(0, 1), "", "0: a fixed map, nothing added"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -595,7 +633,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 41 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 79 &&
                   Reset::kPayloadSize == 36 && Odometry::kPayloadSize == 20 && Pose::kPayloadSize == 42 &&
                   Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
                   AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,

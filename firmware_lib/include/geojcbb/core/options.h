@@ -1,0 +1,88 @@
+/* core: every option of one SLAM step (association and filter), described once. C and C++ both read
+ * this table (an X-macro, as nanopb's FIELDLIST): the C++ settings struct, its defaults and range
+ * checks (core/settings.hpp), the C struct and its defaults (geojcbb.h), the Python keyword
+ * arguments, the command-line options of geojcbb_eval and the options table of docs/options.md all
+ * come from it. The wire's CONFIG names its own subset (node/node.hpp ties each field to a line here
+ * by name, type and default at compile time).
+ *
+ * X(TYPE, name, default, RANGE, unit, cli, meaning)
+ *   TYPE     STRATEGY (enum Strategy), F64 (double), REAL (the scalar T of the C++ templates; float in
+ *            C), F32 (float), INT (int), U32 (uint32_t), BOOL (bool; int in C)
+ *   RANGE    (kind, lo, hi): ANY; GT x > lo; GE x >= lo; OPEN lo < x < hi; LOPEN lo < x <= hi;
+ *            ROPEN lo <= x < hi; CLOSED lo <= x <= hi. Capacity limits (groups, node budget, RJC
+ *            subset) are checked against the Bounds in make_strategy, besides. 3.1415927410125732 is
+ *            pi rounded up to float, so that float pi is in the range.
+ *   cli      the geojcbb_eval option ("": the host derives the value, see docs/options.md); a BOOL
+ *            gets --name and --no-name
+ * A new option is one line here and the stage that reads it (plus a CONFIG field if the device
+ * takes it: node/node.hpp then refuses to compile until the field is tied to its line). */
+#ifndef GEOJCBB_CORE_OPTIONS_H
+#define GEOJCBB_CORE_OPTIONS_H
+
+/* clang-format off */
+#define GEOJCBB_OPTIONS(X) \
+  X(STRATEGY, strategy, 5, (CLOSED, 0, 6), "", "", \
+    "association preset: 0 ICNN, 1 JCBB, 2 KJCBB, 3 DFJCBB, 4 GEMJCBB, 5 GEOJCBB, 6 PCJCBB") \
+  X(F64, confidence, 0.99, (OPEN, 0, 1), "", "--confidence", \
+    "chi-square level of the individual and joint compatibility tests") \
+  X(F64, new_landmark_level, 0.999, (OPEN, 0, 1), "", "--new-landmark-gate", \
+    "chi-square level (2 dof) an unpaired observation's nearest d2 must exceed to become a landmark") \
+  X(REAL, local_radius_m, 10, (GT, 0, 0), "m", "", \
+    "local region r + d (2019 paper, eq. 5); the host sets the sensor's range + --compensation") \
+  X(INT, groups, 3, (CLOSED, 0, 255), "", "--groups", \
+    "K for k-means and GMM-EM, at most the capacity's MaxGroups (0: GMM-EM chooses K by BIC)") \
+  X(BOOL, condition_groups, 0, (ANY, 0, 0), "", "--condition-groups", \
+    "search the groups one after another, each conditioned on the earlier groups' pairings") \
+  X(REAL, dbscan_eps_m, 1.5, (GT, 0, 0), "m", "--dbscan-eps", "DBSCAN neighbourhood radius") \
+  X(INT, dbscan_min_points, 2, (CLOSED, 1, 255), "", "--dbscan-min-points", \
+    "DBSCAN core-point threshold (the point itself included)") \
+  X(U32, node_budget, 0, (GE, 0, 0), "nodes", "--node-budget", \
+    "JCBB interpretation-tree nodes per scan, at most the capacity's MaxJcbbNodes (0: that capacity)") \
+  X(REAL, min_range_m, 0, (GE, 0, 0), "m", "", \
+    "nearest range at which a mapped landmark is expected (host: sensor's + --view-margin)") \
+  X(REAL, max_range_m, 10, (GT, 0, 0), "m", "", \
+    "farthest range at which a mapped landmark is expected, > min_range_m (host: sensor's - --view-margin)") \
+  X(REAL, half_fov_rad, 3.14159265358979, (LOPEN, 0, 3.1415927410125732), "rad", "", \
+    "half the bearing span in which a mapped landmark is expected (host: half the FOV less 3 sigma)") \
+  X(INT, confirm_hits, 2, (CLOSED, 1, 255), "", "--confirm-hits", \
+    "pairings (the first sighting included) that confirm a tentative landmark") \
+  X(INT, max_misses, 2, (CLOSED, 1, 255), "", "--max-misses", \
+    "misses where expected in view that remove a tentative landmark") \
+  X(INT, max_tentative_reviews, 10, (CLOSED, 1, 255), "", "--max-tentative-reviews", \
+    "reviews a landmark may stay tentative before it is removed") \
+  X(BOOL, joint_recheck, 1, (ANY, 0, 0), "", "--joint-recheck", \
+    "test the union of the groups' answers jointly and keep its largest jointly compatible subset") \
+  X(F64, ambiguity_margin, 0, (ROPEN, 0, 1e6), "", "--ambiguity-margin", \
+    "decline: pairings a runner-up within this joint d2 makes differently are left unmatched (0: off)") \
+  X(BOOL, new_if_candidates_taken, 0, (ANY, 0, 0), "", "--new-if-taken", \
+    "with mutual exclusion, an observation whose compatible features are all taken is new, not unmatched") \
+  X(BOOL, verify, 0, (ANY, 0, 0), "", "--verify", \
+    "keep the answer's largest pairwise consistent subset (pose-free; PCJCBB: always on)") \
+  X(BOOL, full_covariance_check, 0, (ANY, 0, 0), "", "--full-covariance-check", \
+    "check every entry of C before the stages (O(n^2)) instead of each where a stage reads it") \
+  X(BOOL, papers_em, 0, (ANY, 0, 0), "", "--papers-em", \
+    "GMM-EM as the papers: farthest-first start, objective-tolerance stop (off: k-means start, stable stop)") \
+  X(REAL, seed_min_position_var_m2, 4, (GT, 0, 0), "m^2", "--seed-min-var", \
+    "PCJCBB seeds with the pose-free clique when the best-placed candidate's position variance is this") \
+  X(REAL, consistency_wide_d2, 23.025850929940457, (GT, 0, 0), "", "--consistency-wide-d2", \
+    "individual d2 of a consistency-graph node, chi2inv(0.99999, 2)") \
+  X(REAL, consistency_pair_d2, 10.827566170662733, (GT, 0, 0), "", "--consistency-pair-d2", \
+    "pairwise distance test of the consistency graph, chi2inv(0.999, 1)") \
+  X(BOOL, rjc, 0, (ANY, 0, 0), "", "--rjc", \
+    "randomized joint compatibility for scans with more than rjc_subset compatible observations (JCBB)") \
+  X(INT, rjc_tries, 8, (CLOSED, 1, 64), "", "--rjc-tries", "RJC tries, each with node_budget / rjc_tries nodes") \
+  X(INT, rjc_subset, 8, (CLOSED, 1, 255), "", "--rjc-subset", \
+    "observations searched by JCBB in an RJC try, at most the capacity's MaxObservations") \
+  X(REAL, occlusion_rad, 0, (CLOSED, 0, 3.1415927410125732), "rad", "--occlusion", \
+    "a landmark with a nearer one within this bearing is hidden, so not expected (0: off)") \
+  X(F32, miss_probability, 0, (ROPEN, 0, 1), "", "--miss-probability", \
+    "remove a landmark missed in view so often that a static one would be so with less than this (0: off)") \
+  X(F64, static_gate_level, 0, (ROPEN, 0, 1), "", "--static-gate-level", \
+    "remove a landmark whose estimate leaves, at this chi-square level, where it was added (0: off)") \
+  X(BOOL, first_estimates_jacobians, 1, (ANY, 0, 0), "", "--fej", \
+    "first-estimates Jacobians (off: every Jacobian at the current estimate); applied at the next reset") \
+  X(BOOL, augment, 1, (ANY, 0, 0), "", "", \
+    "add new landmarks (off: a known, fixed map; the host sets it with --known-map)")
+/* clang-format on */
+
+#endif /* GEOJCBB_CORE_OPTIONS_H */

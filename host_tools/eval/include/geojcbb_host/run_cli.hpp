@@ -1,0 +1,50 @@
+// host_tools: the command-line options of a run, for every program that takes them (geojcbb_eval's
+// sim, mrclam and replay, geojcbb_link, geojcbb_qemu): one option per line of the option table
+// (core/options.h) that names one, with the table's meaning, unit and range, bound to the run's
+// StepSettings; a BOOL gets --name and --no-name. Then the host's own: --compensation (d in r + d)
+// and --view-margin. Each option's default is the value the run already holds (MRCLAM's rules, say).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <type_traits>
+
+#include "geojcbb/core/settings.hpp"
+#include "geojcbb_host/slam_run.hpp"
+
+namespace geojcbb::host {
+
+inline void add_run_options(CLI::App& app, RunOptions& run) {
+  for_each_option(run.step, [&app](const options::Info& info, auto& v) {
+    using V = std::remove_reference_t<decltype(v)>;
+    if (info.cli[0] == '\0') return;  // set by the host
+    std::string what = info.meaning;
+    if (info.unit[0] != '\0') what += std::string(" [") + info.unit + "]";
+    if constexpr (std::is_same<V, bool>::value) {
+      app.add_flag(std::string(info.cli) + ",!--no-" + (info.cli + 2), v, what)->capture_default_str();
+    } else if constexpr (!std::is_enum<V>::value) {
+      const options::Range range = info.range;
+      app.add_option(info.cli, v, what)
+          ->capture_default_str()
+          ->check(CLI::Validator(
+              [range](const std::string& s) {
+                try {
+                  return range.contains(std::stod(s)) ? std::string() : std::string("outside the option's range");
+                } catch (const std::exception&) {
+                  return std::string("not a number");
+                }
+              },
+              "", "option table range"));
+    }
+  });
+  app.add_option("--compensation", run.compensation_m, "d in the local region r + d [m] (r: the sensor's max range)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
+  app.add_option("--view-margin", run.view_margin_m,
+                 "a landmark within this of the sensor's range limits is not expected in view [m]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
+}
+
+}  // namespace geojcbb::host
