@@ -110,7 +110,9 @@ int run(int argc, char** argv) {
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
   app.add_option("--runs", runs, "seeds streamed per measurement (seed, seed+1, ...)")->default_val(runs);
   app.add_option("--seed", seed, "first seed")->default_val(seed);
-  app.add_option("--strategies", names, "strategies, comma separated")->delimiter(',')->default_str("GEOJCBB,JCBB");
+  app.add_option("--strategies", names, std::string("strategies, comma separated (") + kPresetsHelp + ")")
+      ->delimiter(',')
+      ->default_str("GEOJCBB,JCBB");
   app.add_option("--windows", windows, "windows to measure, comma separated")->delimiter(',')->default_str("1,8");
   app.add_option("--max-obs", max_obs, "observations per scan, the nearest (at most 24)")
       ->default_val(max_obs)

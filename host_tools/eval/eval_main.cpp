@@ -537,9 +537,7 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(1, 100000));
   sim->add_option("--seed", so.seed, "first seed")->default_val(1);
   sim->add_option("--strategies", so.strategies,
-                  "strategies to run, comma separated "
-                  "(ICNN,JCBB,KJCBB,DFJCBB,GEMJCBB,GEOJCBB,PCJCBB, each also with +V for the "
-                  "verification; default the seven presets)")
+                  std::string("strategies to run, comma separated (") + kPresetsHelp + "; default the seven presets)")
       ->delimiter(',');
   sim->add_option("--jobs", so.jobs,
                   "worker threads (default: the number of cores; 1 gives the "
@@ -574,7 +572,9 @@ int run(int argc, char** argv) {
                  "$GEOJCBB_MRCLAM_DIR, else ../shared/data/mrclam beside the repository)");
   mr->add_option("--datasets", mo.datasets, "dataset numbers")->delimiter(',')->default_str("6,7");
   mr->add_option("--robots", mo.robots, "robot numbers")->delimiter(',')->default_str("1,2,3,4,5");
-  mr->add_option("--strategies", mo_strategies, "strategies, comma separated (default all)")->delimiter(',');
+  mr->add_option("--strategies", mo_strategies,
+                 std::string("strategies, comma separated (") + kPresetsHelp + "; default the seven presets)")
+      ->delimiter(',');
   mr->add_option("--out-dir", mo_out, "directory for mrclam.csv and mrclam.json")->default_val(mo_out);
   mr->add_flag("!--no-progress", mo_progress, "no progress bar on stderr");
   mr->add_option("--sigma-range", mo.sigma_range_m,
@@ -631,7 +631,9 @@ int run(int argc, char** argv) {
                                 "replay your own log (docs/replay.md): every strategy, scored when the measurements "
                                 "are labelled; tables, replay.csv, replay.json and the path/map figure");
   rp->add_option("--log", ro.log, "the log file (CSV, docs/replay.md)")->required();
-  rp->add_option("--strategies", ro.strategies, "strategies, comma separated (default all)")->delimiter(',');
+  rp->add_option("--strategies", ro.strategies,
+                 std::string("strategies, comma separated (") + kPresetsHelp + "; default the seven presets)")
+      ->delimiter(',');
   rp->add_flag("--truth", ro.oracle, "add a row TRUTH: association by the labels (needs labelled measurements)");
   rp->add_option("--out-dir", ro.out_dir, "directory for replay.csv, replay.json and replay_path.svg")
       ->default_val(ro.out_dir);

@@ -154,7 +154,7 @@ int run(int argc, char** argv) {
       ->default_val(q.machine);
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
   app.add_option("--strategies", names,
-                 "strategies, comma separated, each optionally with +V (default: the papers' six)")
+                 std::string("strategies, comma separated (") + kPresetsHelp + "; default: the papers' six)")
       ->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
   app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);

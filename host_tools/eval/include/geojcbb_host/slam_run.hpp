@@ -90,6 +90,8 @@ struct Method {
 /// each name read by parse_strategy (case-insensitive; "+V" switches the verification in, e.g.
 /// "JCBB+V"), in the order given; no names: every preset (`all_presets`) or the papers' six. `oracle`
 /// appends the TRUTH row. Throws std::invalid_argument naming an unknown strategy.
+/// The presets as the tools' help texts name them.
+constexpr const char* kPresetsHelp = "ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, each optionally with +V";
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
 struct StepRecord {
