@@ -1,5 +1,5 @@
 // core: the options of one association pipeline as plain data. The named strategies (ICNN, JCBB, and
-// the grouped ones of issue 3) are presets of these switches, not separate code paths.
+// the grouped ones of the grouped-association round) are presets of these switches, not separate code paths.
 #pragma once
 
 #include "geojcbb/core/capacity.hpp"
@@ -17,7 +17,7 @@ enum class SearchMethod : std::uint8_t {
 /// Most RJC tries per scan (AssociationConfig::rjc_tries).
 constexpr int kMaxRjcTries = 64;
 
-/// How much of C validate() checks before the stages run (issue 13).
+/// How much of C validate() checks before the stages run (the packed-covariance round).
 enum class CovarianceCheck : std::uint8_t {
   /// Each entry of C is checked where a stage reads it: the diagonal blocks of the candidates in the
   /// local region before gating, a cross block when a joint (or pairwise) test reads it. A bad entry
@@ -25,7 +25,7 @@ enum class CovarianceCheck : std::uint8_t {
   /// the answer. O(n) before the stages instead of O(n^2).
   kWhereRead,
   /// Every entry between candidates of the local region, before any stage runs (the behaviour before
-  /// issue 13; O(n^2) per call).
+  /// the packed-covariance round; O(n^2) per call).
   kFull,
 };
 
@@ -67,7 +67,7 @@ struct AssociationConfig {
   /// (kNewFeature, its d2 the nearest over the other candidates) instead of kUnmatched; a second
   /// landmark next to a mapped one can then be mapped when both are seen together. Off: kUnmatched.
   bool new_if_candidates_taken = false;
-  /// Our addition (issue 12), verify: the answer's pairings must also be pairwise consistent
+  /// Our addition (the pose-free consistency round), verify: the answer's pairings must also be pairwise consistent
   /// (consistency/, pose-free distance test). The largest pairwise consistent subset of the answer
   /// (the max clique of the graph over its own pairings) is kept; the other pairings are dropped and
   /// their observations left kUnmatched. Dropping rather than replacing the answer with the clique
@@ -75,7 +75,7 @@ struct AssociationConfig {
   /// (the wide clique alone holds a wrong pairing in about 1 scene in 10: docs/consistency.md,
   /// "Limits"), and its graph has at most one node per observation, so it is never truncated.
   bool verify = false;
-  /// Our addition (issue 12), seed: when the pose is uncertain (the least Cartesian position variance
+  /// Our addition (the pose-free consistency round), seed: when the pose is uncertain (the least Cartesian position variance
   /// of a predicted candidate, tr(J_a C_aa J_a^T), is at least seed_min_position_var_m2), the
   /// pose-free clique over the wide-gate pairings is tested jointly and, when it passes with at
   /// least seed_min_pairings pairings, fixed as the prefix of one JCBB search over the rest of the
@@ -86,7 +86,7 @@ struct AssociationConfig {
   /// Graph options of verify and seed: pairwise gate, wide gate, clique budget. Its local region is
   /// taken from this config's, not from here.
   ConsistencyOptions<T> consistency;
-  /// Our addition (issue 12), randomized joint compatibility for large scans (RJC; Paz, Guivant,
+  /// Our addition (the pose-free consistency round), randomized joint compatibility for large scans (RJC; Paz, Guivant,
   /// Tardos, Neira 2007; jcbb/rjc.hpp): JCBB on rjc_subset random observations, the rest completed
   /// by nearest neighbour under the joint test, rjc_tries times from rjc_seed; the best try is kept.
   /// Used by JCBB without grouping when more than rjc_subset observations have a compatible

@@ -157,7 +157,7 @@ class Slam {
     return Status::kOk;
   }
 
-  /// Relocalisation (issue 12): the robot was carried somewhere unknown. The pose estimate becomes
+  /// Relocalisation (the pose-free consistency round): the robot was carried somewhere unknown. The pose estimate becomes
   /// x with covariance Pxx and its correlation with the map is removed (the map no longer says
   /// anything about where the robot is); the map and its covariance are kept.
   /// @return as reset(); nothing changes unless kOk.
