@@ -466,10 +466,15 @@ int run_convert(const ConvertOptions& c) {
 // device and where its capacity differs from the in-process filter's, and at the end shuts down a
 // device it started. Returns run's exit code (1 when a started device did not exit cleanly).
 template <class Run>
-int with_device(const LinkCli& lc, bool oracle, Run&& run) {
+int with_device(const LinkCli& lc, bool oracle, bool known_map, Run&& run) {
   if (lc.port.empty() && lc.device.empty()) return run(RunInputsFn{}, std::string{});
   if (!lc.port.empty() && !lc.device.empty()) throw std::runtime_error("give --port or --device, not both");
   if (oracle) throw std::runtime_error("the TRUTH row (--truth) runs in process only: drop it with --port/--device");
+  if (known_map) {  // link_config refuses it too, per run; here before a device is started
+    throw std::runtime_error(
+        "known_map (--known-map): CONFIG carries no landmarks, so a device would map instead of localise; run it in "
+        "process");
+  }
   DeviceLink dl(lc, !lc.device.empty());
   const std::string info = dl.describe();
   std::printf("%s; %d scan(s) in flight, reply timeout %d ms\n", info.c_str(), lc.window, lc.timeout_ms);
@@ -706,7 +711,7 @@ int run(int argc, char** argv) {
                         std::string(GEOJCBB_SCENARIO_DIR) + "/env2.json"};
       }
       so.progress = so.progress && isatty(STDERR_FILENO);
-      return with_device(sim_link, so.oracle, [&](const RunInputsFn& runner, const std::string& info) {
+      return with_device(sim_link, so.oracle, false, [&](const RunInputsFn& runner, const std::string& info) {
         so.runner = runner;
         so.device_info = info;
         return run_sim(so);
@@ -714,7 +719,7 @@ int run(int argc, char** argv) {
     }
     mo.strategies = select_methods(mo_strategies, true, mo_oracle);
     if (mo_legacy) mo.camera = mo.drive = false;
-    return with_device(mr_link, mo_oracle, [&](const RunInputsFn& runner, const std::string&) {
+    return with_device(mr_link, mo_oracle, mo.known_map, [&](const RunInputsFn& runner, const std::string&) {
       mo.runner = runner;
       if (runner) mo.jobs = 1;  // one device, one replay at a time
       return run_mrclam_report(mo, mo_out, mo_progress && isatty(STDERR_FILENO));
