@@ -1,0 +1,482 @@
+// reloc: the robot's pose from one scan and the map alone (no pose prior), by two-point alignment.
+// In: observations z_i = (range, bearing) with R_i; the map's landmark means m_j with covariances
+// P_j (AlignWorkspace::push_landmark). Out: the pose world_T_robot, its covariance from the fit, the
+// inlier pairings, and whether the pose is unique (AlignResult).
+//   base pairs   the longest observed pairs (a, b), |q_a - q_b| >= min_base_m, at most base_pairs
+//   matches      every map pair (j, k) with (|q_a - q_b| - |m_j - m_k|)^2 <= chi2(1) s2: two poses
+//                each (a->j, b->k and a->k, b->j), rotation only (det R = +1: no mirror image)
+//   score        inliers: observations whose world point R q_i + t lies within the 2-dof gate of a
+//                landmark, S = R Sigma_i R^T + P_j (a window of the map sorted by x)
+//   accept       best inliers >= min_inliers and >= the best distinct pose's + margin
+//   refine       weighted 2-D Procrustes on the exclusive inliers (2 rounds); covariance
+//                (sum J^T S^-1 J)^-1 with J = [I, dR/dtheta q_i]
+// Bounds: m^2 base-pair choice; base_pairs * n (n - 1) / 2 map pairs; kMaxAlignHypotheses scored
+// hypotheses, each m (log n + window) inlier tests. No pair table: the map pairs are enumerated per
+// base pair (no RAM; docs/relocalisation.md compares the cost). References: the 2-point RANSAC of
+// scan-to-map localisation; Arun, Huang, Blostein (1987) for the closed-form rigid fit.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+#include <Eigen/Cholesky>
+
+#include "geojcbb/consistency/pairwise.hpp"
+#include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/range_bearing.hpp"
+#include "geojcbb/gate/validate.hpp"
+
+namespace geojcbb::reloc {
+
+/// Most observed base pairs one call tries.
+constexpr int kMaxBasePairs = 8;
+/// Most pose hypotheses one call scores (every base pair together); past it the call stops early
+/// and says so (AlignResult::truncated).
+constexpr int kMaxAlignHypotheses = 4096;
+/// Distinct poses remembered while scoring (the best and its rivals).
+constexpr int kTopPoses = 4;
+/// Refinement rounds (inliers, then Procrustes).
+constexpr int kRefineRounds = 2;
+
+template <typename T>
+struct AlignOptions {
+  int base_pairs = 4;                 ///< observed pairs tried, 1 .. kMaxBasePairs
+  int min_inliers = 5;                ///< a pose needs at least this many inliers, >= 3
+  int margin = 2;                     ///< inliers by which the best pose must lead the best distinct pose, >= 1
+  T gate_d2 = T(13.815510557964274);  ///< inlier test, chi2inv(0.999, 2)
+  T pair_d2 = T(10.827566170662733);  ///< pair distance test, chi2inv(0.999, 1)
+  T min_base_m = T(2);                ///< shorter observed pairs fix the heading too poorly [m]
+  T distinct_m = T(1);                ///< poses farther apart than this are distinct [m] ...
+  T distinct_rad = T(0.2);            ///< ... or turned by more than this [rad]
+  /// The sensor's view, for the misses of a pose: map landmarks it would see there and did not.
+  /// max_range_m 0: misses not counted.
+  T min_range_m = T(0);
+  T max_range_m = T(0);
+  T half_fov_rad = kPi<T>;
+  /// A pose is plausible when its inliers are at least this share of inliers + misses.
+  T min_inlier_ratio = T(0.6);
+
+  bool valid() const {
+    return base_pairs >= 1 && base_pairs <= kMaxBasePairs && min_inliers >= 3 && margin >= 1 && gate_d2 > T(0) &&
+           pair_d2 > T(0) && min_base_m >= T(0) && distinct_m > T(0) && distinct_rad > T(0) && std::isfinite(gate_d2) &&
+           std::isfinite(pair_d2) && std::isfinite(min_base_m) && std::isfinite(distinct_m) &&
+           std::isfinite(distinct_rad) && min_range_m >= T(0) && max_range_m >= T(0) && half_fov_rad > T(0) &&
+           min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m);
+  }
+};
+
+template <typename T, class B>
+struct AlignResult {
+  bool accepted = false;          ///< unique and supported: pose and cov are the answer
+  Pose2<T> pose{};                ///< world_T_robot (refined when accepted; else the best hypothesis)
+  Mat3<T> cov = Mat3<T>::Zero();  ///< of (x, y, theta) from the fit (accepted only)
+  int inliers = 0;                ///< of the best pose (after refinement when accepted)
+  int misses = 0;                 ///< of the best pose: landmarks in view there, not observed
+  int rival_inliers = 0;          ///< of the best plausible pose distinct from it (0: none)
+  int hypotheses = 0;             ///< poses scored
+  bool truncated = false;         ///< kMaxAlignHypotheses reached before every match was scored
+  /// Per observation: the map index (push order) it pairs with at the answer, or -1.
+  std::array<std::int16_t, B::kMaxObservations> landmark{};
+};
+
+namespace align_detail {
+template <typename T>
+struct Candidate {
+  Pose2<T> pose{};
+  int inliers = 0;
+  T cost = T(0);  ///< sum of the inliers' d2 (ties)
+};
+}  // namespace align_detail
+
+/// The map and the scratch of one align() call; fill the map with clear_map / push_landmark.
+template <typename T, class B>
+struct AlignWorkspace {
+  int n = 0;
+  std::array<Vec2<T>, B::kMaxLandmarks> m;             ///< landmark means, sorted by x after align()
+  std::array<Mat2<T>, B::kMaxLandmarks> P;             ///< their covariances
+  std::array<std::int16_t, B::kMaxLandmarks> index;    ///< sorted position -> push order
+  std::array<Vec2<T>, B::kMaxObservations> q;          ///< observed points, robot frame [m]
+  std::array<Mat2<T>, B::kMaxObservations> S;          ///< their covariances J R J^T
+  std::array<T, B::kMaxObservations> radius;           ///< per observation: inlier search radius [m]
+  std::array<std::int16_t, B::kMaxObservations> pick;  ///< per observation: sorted landmark or -1
+  std::array<T, B::kMaxObservations> pick_d2;
+  std::array<std::int8_t, 2 * kMaxBasePairs> base;  ///< observation pairs (a, b), longest first
+  std::array<align_detail::Candidate<T>, kTopPoses> top;
+
+  void clear_map() { n = 0; }
+  /// @return kOk; kCapacityExceeded when MaxLandmarks are in; kNonFinite; kNotPositiveDefinite
+  ///         for a P that is not a covariance. Nothing is added unless kOk.
+  [[nodiscard]] Status push_landmark(const Vec2<T>& mean, const Mat2<T>& cov) {
+    if (n >= B::kMaxLandmarks) return Status::kCapacityExceeded;
+    if (!all_finite(mean) || !all_finite(cov)) return Status::kNonFinite;
+    if (!(cov(0, 0) >= T(0) && cov(1, 1) >= T(0) && cov(0, 0) * cov(1, 1) >= cov(0, 1) * cov(1, 0))) {
+      return Status::kNotPositiveDefinite;
+    }
+    m[n] = mean;
+    P[n] = cov;
+    index[n] = static_cast<std::int16_t>(n);
+    ++n;
+    return Status::kOk;
+  }
+};
+
+namespace align_detail {
+
+template <typename T>
+Vec2<T> transform(const Pose2<T>& x, const Vec2<T>& q) {
+  const T c = fmath::cos(x.theta), s = fmath::sin(x.theta);
+  return Vec2<T>(x.x + c * q.x() - s * q.y(), x.y + s * q.x() + c * q.y());
+}
+
+/// Map index (sorted) of the landmark nearest (in d2) to observation i at pose x within the gate,
+/// or -1; its d2 in `d2`. Bound: log2(n) + the landmarks in the x window.
+template <typename T, class B>
+int nearest(const AlignWorkspace<T, B>& ws, int i, const Pose2<T>& x, const Mat2<T>& Rot, T gate_d2, T& d2) {
+  const Vec2<T> w = transform(x, ws.q[i]);
+  const T lo_x = w.x() - ws.radius[i];
+  int lo = 0, hi = ws.n;  // first landmark with x >= lo_x; <= log2(kMaxLandmarks) + 1 steps
+  while (lo < hi) {
+    const int mid = lo + (hi - lo) / 2;
+    if (ws.m[mid].x() < lo_x)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  const Mat2<T> Sw = Rot * ws.S[i] * Rot.transpose();
+  int best = -1;
+  d2 = std::numeric_limits<T>::infinity();
+  for (int j = lo; j < ws.n && ws.m[j].x() <= w.x() + ws.radius[i]; ++j) {  // <= kMaxLandmarks
+    const Vec2<T> e = w - ws.m[j];
+    if (std::abs(e.y()) > ws.radius[i]) continue;
+    const Mat2<T> S = Sw + ws.P[j];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0))) continue;
+    const T q = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
+    if (q <= gate_d2 && q < d2) {
+      d2 = q;
+      best = j;
+    }
+  }
+  return best;
+}
+
+template <typename T>
+Mat2<T> rotation(T theta) {
+  const T c = fmath::cos(theta), s = fmath::sin(theta);
+  Mat2<T> r;
+  r << c, -s, s, c;
+  return r;
+}
+
+/// Inliers of pose x (a landmark may count twice here: scoring only). Stops early once even every
+/// remaining observation could not reach `need`. Bound: m nearest() calls.
+template <typename T, class B>
+Candidate<T> score(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate_d2, int need) {
+  Candidate<T> c;
+  c.pose = x;
+  const Mat2<T> Rot = rotation(x.theta);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (c.inliers + (m - i) < need) break;
+    T d2 = T(0);
+    if (nearest(ws, i, x, Rot, gate_d2, d2) >= 0) {
+      ++c.inliers;
+      c.cost += d2;
+    }
+  }
+  return c;
+}
+
+template <typename T>
+bool better(const Candidate<T>& a, const Candidate<T>& b) {
+  return a.inliers > b.inliers || (a.inliers == b.inliers && a.cost < b.cost);
+}
+
+template <typename T>
+bool distinct(const Pose2<T>& a, const Pose2<T>& b, const AlignOptions<T>& opt) {
+  const T dx = a.x - b.x, dy = a.y - b.y;
+  return dx * dx + dy * dy > opt.distinct_m * opt.distinct_m ||
+         std::abs(wrap_angle(a.theta - b.theta)) > opt.distinct_rad;
+}
+
+/// Keeps the kTopPoses best distinct poses, best first: a pose close to a kept one replaces it
+/// when better, else it is dropped. Bound: kTopPoses.
+template <typename T>
+void offer(std::array<Candidate<T>, kTopPoses>& top, int& kept, const Candidate<T>& c, const AlignOptions<T>& opt) {
+  for (int k = 0; k < kept; ++k) {  // <= kTopPoses
+    if (distinct(top[k].pose, c.pose, opt)) continue;
+    if (!better(c, top[k])) return;
+    for (int q = k; q + 1 < kept; ++q) top[q] = top[q + 1];  // <= kTopPoses: take it out
+    --kept;
+    break;
+  }
+  int at = kept;                                  // where c goes
+  while (at > 0 && better(c, top[at - 1])) --at;  // <= kTopPoses
+  if (at >= kTopPoses) return;
+  const int last = kept < kTopPoses ? kept : kTopPoses - 1;
+  for (int q = last; q > at; --q) top[q] = top[q - 1];  // <= kTopPoses
+  top[at] = c;
+  if (kept < kTopPoses) ++kept;
+}
+
+/// Exclusive inliers of pose x: each observation its nearest landmark in the gate; a landmark
+/// taken twice keeps the observation with the smaller d2. Bound: m nearest() calls + m^2.
+template <typename T, class B>
+int exclusive_inliers(AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate_d2) {
+  const Mat2<T> Rot = rotation(x.theta);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    ws.pick[i] = static_cast<std::int16_t>(nearest(ws, i, x, Rot, gate_d2, ws.pick_d2[i]));
+  }
+  int count = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    for (int k = 0; k < m; ++k) {  // <= kMaxObservations
+      if (k == i || ws.pick[k] != ws.pick[i]) continue;
+      if (ws.pick_d2[k] < ws.pick_d2[i] || (ws.pick_d2[k] == ws.pick_d2[i] && k < i)) {
+        ws.pick[i] = -1;
+        break;
+      }
+    }
+    count += ws.pick[i] >= 0;
+  }
+  return count;
+}
+
+/// Weighted 2-D Procrustes (rotation only) of the picked pairs: the pose minimising
+/// sum w_i |R q_i + t - m_i|^2, w_i = 1 / tr(S_i + P_i). Needs >= 2 pairs.
+template <typename T, class B>
+Pose2<T> procrustes(const AlignWorkspace<T, B>& ws, int m) {
+  T sw = T(0);
+  Vec2<T> qc = Vec2<T>::Zero(), mc = Vec2<T>::Zero();
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    const int j = ws.pick[i];
+    const T w = T(1) / (ws.S[i].trace() + ws.P[j].trace());
+    sw += w;
+    qc += w * ws.q[i];
+    mc += w * ws.m[j];
+  }
+  qc /= sw;
+  mc /= sw;
+  T sin_sum = T(0), cos_sum = T(0);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    const int j = ws.pick[i];
+    const T w = T(1) / (ws.S[i].trace() + ws.P[j].trace());
+    const Vec2<T> a = ws.q[i] - qc, b = ws.m[j] - mc;
+    cos_sum += w * (a.x() * b.x() + a.y() * b.y());
+    sin_sum += w * (a.x() * b.y() - a.y() * b.x());
+  }
+  Pose2<T> x;
+  x.theta = fmath::atan2(sin_sum, cos_sum);
+  const Mat2<T> Rot = rotation(x.theta);
+  const Vec2<T> t = mc - Rot * qc;
+  x.x = t.x();
+  x.y = t.y();
+  return x;
+}
+
+/// One Gauss-Newton step of the weighted fit over the picked pairs, from pose x: minimises
+/// sum r_i^T S_i^-1 r_i, r_i = R q_i + t - m_i, S_i = R Sigma_i R^T + P_i, J_i = dr_i/d(x, y, theta)
+/// = [I, dR/dtheta q_i]; `cov` gets (sum J_i^T S_i^-1 J_i)^-1 at x (the fit's covariance).
+/// @return false when an S_i or the information is not positive definite (x, cov untouched).
+template <typename T, class B>
+bool gauss_newton_step(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<T>& cov) {
+  const Mat2<T> Rot = rotation(x.theta);
+  Mat2<T> dRot;
+  dRot << -Rot(1, 0), -Rot(0, 0), Rot(0, 0), -Rot(1, 0);  // dR/dtheta
+  Mat3<T> info = Mat3<T>::Zero();
+  Vec3<T> grad = Vec3<T>::Zero();
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    Mat23<T> J;
+    J.template leftCols<2>() = Mat2<T>::Identity();
+    J.col(2) = dRot * ws.q[i];
+    const Vec2<T> r = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[ws.pick[i]];
+    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[ws.pick[i]];
+    const Eigen::LLT<Mat2<T>> llt(S);
+    if (llt.info() != Eigen::Success) return false;
+    info += J.transpose() * llt.solve(J);
+    grad += J.transpose() * llt.solve(r);
+  }
+  const Eigen::LLT<Mat3<T>> llt(info);
+  if (llt.info() != Eigen::Success) return false;
+  const Mat3<T> c = symmetric_part(Mat3<T>(llt.solve(Mat3<T>::Identity())));
+  const Vec3<T> dx = -(c * grad);
+  if (!all_finite(c) || !all_finite(dx)) return false;
+  x = Pose2<T>{x.x + dx(0), x.y + dx(1), wrap_angle(x.theta + dx(2))};
+  cov = c;
+  return true;
+}
+
+/// Map landmarks the sensor would see from pose x (view.max_range_m > 0) that no picked pair
+/// holds: the misses of the set likelihood. Bound: n.
+template <typename T, class B>
+int misses(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& opt) {
+  int expected = 0;
+  for (int j = 0; j < ws.n; ++j) {  // <= kMaxLandmarks
+    const Vec2<T> z = observe(x, ws.m[j]);
+    expected += z.x() >= opt.min_range_m && z.x() <= opt.max_range_m && std::abs(z.y()) <= opt.half_fov_rad;
+  }
+  int paired = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    const Vec2<T> z = observe(x, ws.m[ws.pick[i]]);
+    paired += z.x() >= opt.min_range_m && z.x() <= opt.max_range_m && std::abs(z.y()) <= opt.half_fov_rad;
+  }
+  return expected - paired;
+}
+
+}  // namespace align_detail
+
+/// The pose of the robot from one scan against the map in ws (see the file's head).
+/// @return kOk (out written, accepted or not); kInvalidInput for bad options; the statuses of
+///         validate_observations. Nothing is written to `out` unless kOk.
+template <typename T, class B>
+[[nodiscard]] Status align(const Observations<T, B>& obs, const AlignOptions<T>& opt, AlignWorkspace<T, B>& ws,
+                           AlignResult<T, B>& out) {
+  using namespace align_detail;
+  if (!opt.valid()) return Status::kInvalidInput;
+  Status st = validate_observations(obs);
+  if (st != Status::kOk) return st;
+  const int m = obs.count;
+  const int n = ws.n;
+  // The map sorted by x (insertion sort, stable; <= kMaxLandmarks^2 / 2 moves), the largest
+  // landmark variance bound for the search windows.
+  T map_tr = T(0);
+  for (int j = 1; j < n; ++j) {  // <= kMaxLandmarks
+    const Vec2<T> mj = ws.m[j];
+    const Mat2<T> Pj = ws.P[j];
+    const std::int16_t ij = ws.index[j];
+    int k = j;
+    while (k > 0 && ws.m[k - 1].x() > mj.x()) {  // <= kMaxLandmarks
+      ws.m[k] = ws.m[k - 1];
+      ws.P[k] = ws.P[k - 1];
+      ws.index[k] = ws.index[k - 1];
+      --k;
+    }
+    ws.m[k] = mj;
+    ws.P[k] = Pj;
+    ws.index[k] = ij;
+  }
+  for (int j = 0; j < n; ++j) map_tr = std::max(map_tr, ws.P[j].trace());  // <= kMaxLandmarks
+  // Observed points and their covariances (the sensor frame is the robot's).
+  const Pose2<T> origin{};
+  Mat23<T>* const no_pose_jacobian = nullptr;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    Mat2<T> J;
+    ws.q[i] = inverse_observe(origin, obs.z[i], no_pose_jacobian, &J);
+    ws.S[i] = J * obs.R[i] * J.transpose();
+    ws.radius[i] = std::sqrt(opt.gate_d2 * (ws.S[i].trace() + map_tr));  // >= the gate's extent
+  }
+  // Base pairs: the longest observed pairs, longest first (insertion into a short list).
+  int bases = 0;
+  std::array<T, kMaxBasePairs> base_len{};
+  for (int a = 0; a < m; ++a) {        // <= kMaxObservations
+    for (int b = a + 1; b < m; ++b) {  // <= kMaxObservations
+      const T len = (ws.q[a] - ws.q[b]).norm();
+      if (!(len >= opt.min_base_m)) continue;
+      int at = bases;
+      while (at > 0 && base_len[at - 1] < len) --at;  // <= kMaxBasePairs
+      if (at >= opt.base_pairs) continue;
+      const int last = bases < opt.base_pairs ? bases : opt.base_pairs - 1;
+      for (int q = last; q > at; --q) {  // <= kMaxBasePairs
+        base_len[q] = base_len[q - 1];
+        ws.base[2 * q] = ws.base[2 * q - 2];
+        ws.base[2 * q + 1] = ws.base[2 * q - 1];
+      }
+      base_len[at] = len;
+      ws.base[2 * at] = static_cast<std::int8_t>(a);
+      ws.base[2 * at + 1] = static_cast<std::int8_t>(b);
+      if (bases < opt.base_pairs) ++bases;
+    }
+  }
+  // Hypotheses from every map pair of a matching length, scored.
+  int kept = 0;
+  int scored = 0;
+  bool truncated = false;
+  for (int p = 0; p < bases && !truncated; ++p) {  // <= kMaxBasePairs
+    const int a = ws.base[2 * p], b = ws.base[2 * p + 1];
+    const Vec2<T> u = ws.q[b] - ws.q[a];
+    const T len = base_len[p];
+    const T var_u = pairwise_detail::norm_variance(u, Mat2<T>(ws.S[a] + ws.S[b]), len);
+    const T angle_u = fmath::atan2(u.y(), u.x());
+    const Vec2<T> mid_q = T(0.5) * (ws.q[a] + ws.q[b]);
+    // Widest tolerance over the map (a quick reject before the exact test).
+    const T tol_max = std::sqrt(opt.pair_d2 * (var_u + T(2) * map_tr));
+    const T lo2 = len > tol_max ? (len - tol_max) * (len - tol_max) : T(0);
+    const T hi2 = (len + tol_max) * (len + tol_max);
+    for (int j = 0; j < n && !truncated; ++j) {        // <= kMaxLandmarks
+      for (int k = j + 1; k < n && !truncated; ++k) {  // <= kMaxLandmarks
+        const Vec2<T> v = ws.m[k] - ws.m[j];
+        const T v2 = v.squaredNorm();
+        if (v2 < lo2 || v2 > hi2) continue;
+        const T len_v = std::sqrt(v2);
+        const T var_v = pairwise_detail::norm_variance(v, Mat2<T>(ws.P[j] + ws.P[k]), len_v);
+        const T e = len - len_v;
+        if (e * e > opt.pair_d2 * (var_u + var_v)) continue;
+        const T angle_v = fmath::atan2(v.y(), v.x());
+        const Vec2<T> mid_m = T(0.5) * (ws.m[j] + ws.m[k]);
+        for (int flip = 0; flip < 2; ++flip) {  // a->j, b->k; then a->k, b->j
+          if (scored >= kMaxAlignHypotheses) {
+            truncated = true;
+            break;
+          }
+          Pose2<T> x;
+          x.theta = wrap_angle(angle_v - angle_u + (flip ? kPi<T> : T(0)));
+          const Vec2<T> t = mid_m - rotation(x.theta) * mid_q;
+          x.x = t.x();
+          x.y = t.y();
+          ++scored;
+          // A pose below the second kept can change neither the best nor its rival.
+          const int need = kept >= 2 && ws.top[1].inliers > opt.min_inliers ? ws.top[1].inliers : opt.min_inliers;
+          const Candidate<T> c = score(ws, m, x, opt.gate_d2, need);
+          if (c.inliers >= opt.min_inliers) offer(ws.top, kept, c, opt);
+        }
+      }
+    }
+  }
+  // Each kept pose refined (exclusive inliers, Procrustes, Gauss-Newton) and its misses counted;
+  // the best plausible one is the answer, the best plausible one distinct from it its rival.
+  AlignResult<T, B> r;
+  r.hypotheses = scored;
+  r.truncated = truncated;
+  for (int i = 0; i < m; ++i) r.landmark[i] = -1;  // <= kMaxObservations
+  int best = -1, rival = -1;
+  std::array<Mat3<T>, kTopPoses> cov;
+  std::array<int, kTopPoses> miss{};
+  std::array<bool, kTopPoses> plausible{};
+  for (int k = 0; k < kept; ++k) {  // <= kTopPoses
+    Candidate<T>& c = ws.top[k];
+    bool ok = exclusive_inliers(ws, m, c.pose, opt.gate_d2) >= 3;
+    if (ok) c.pose = procrustes(ws, m);
+    for (int round = 0; ok && round < kRefineRounds; ++round) {  // <= kRefineRounds
+      ok = exclusive_inliers(ws, m, c.pose, opt.gate_d2) >= 3 && gauss_newton_step(ws, m, c.pose, cov[k]);
+    }
+    c.inliers = exclusive_inliers(ws, m, c.pose, opt.gate_d2);
+    miss[k] = opt.max_range_m > T(0) ? misses(ws, m, c.pose, opt) : 0;
+    plausible[k] = ok && c.inliers >= opt.min_inliers && T(c.inliers) >= opt.min_inlier_ratio * T(c.inliers + miss[k]);
+    if (plausible[k] && (best < 0 || better(c, ws.top[best]))) best = k;
+  }
+  for (int k = 0; k < kept; ++k) {  // <= kTopPoses
+    if (k == best || !plausible[k] || (best >= 0 && !distinct(ws.top[k].pose, ws.top[best].pose, opt))) continue;
+    if (rival < 0 || better(ws.top[k], ws.top[rival])) rival = k;
+  }
+  if (kept > 0) {
+    const int show = best >= 0 ? best : 0;
+    r.pose = ws.top[show].pose;
+    r.inliers = ws.top[show].inliers;
+    r.misses = miss[show];
+  }
+  r.rival_inliers = rival >= 0 ? ws.top[rival].inliers : 0;
+  if (best >= 0 && r.inliers >= r.rival_inliers + opt.margin) {
+    exclusive_inliers(ws, m, ws.top[best].pose, opt.gate_d2);
+    r.accepted = true;
+    r.cov = cov[best];
+    for (int i = 0; i < m; ++i) r.landmark[i] = ws.pick[i] < 0 ? std::int16_t(-1) : ws.index[ws.pick[i]];
+  }
+  out = r;
+  return Status::kOk;
+}
+
+}  // namespace geojcbb::reloc
