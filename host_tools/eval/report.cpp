@@ -15,9 +15,13 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   group_score.add(r.group_score);
   for (const StepRecord& k : r.steps) scan_ms.push_back(1e3 * k.assoc_s);
   if (kidnap_t_s > 0) {
-    const int at = relocalised_at(r, kidnap_t_s);
+    const KidnapScore k = kidnap_score(r, kidnap_t_s);
     ++reloc_runs;
-    reloc_found3 += at >= 1 && at <= 3;
+    reloc_found3 += k.found_at >= 1 && k.found_at <= 3;
+    reloc_false += k.false_relocalisation;
+    reloc_error_m += k.pose_error_after_m;
+    reloc_anees_before += k.anees_before;
+    reloc_anees_after += k.anees_after;
   }
   ++runs;
   scans += r.scans;
@@ -80,6 +84,12 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   }
   row.reloc_runs = reloc_runs;
   row.reloc_found3 = reloc_found3;
+  row.reloc_false = reloc_false;
+  if (reloc_runs > 0) {
+    row.reloc_error_m = reloc_error_m / reloc_runs;
+    row.reloc_anees_before = reloc_anees_before / reloc_runs;
+    row.reloc_anees_after = reloc_anees_after / reloc_runs;
+  }
   if (runs == 0) return row;
   row.abs_x = abs_x / runs;
   row.abs_y = abs_y / runs;
@@ -169,7 +179,7 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
     else if (c == "budget_hits")
       o << r.budget_hits;
     else if (c == "relocalised_at_scan")
-      o << (kidnap_t_s > 0 ? relocalised_at(r, kidnap_t_s) : -1);
+      o << (kidnap_t_s > 0 ? kidnap_score(r, kidnap_t_s).found_at : -1);
     else if (c == "anees") {
       double nees = 0;
       for (const StepRecord& k : r.steps) nees += k.pose_nees;

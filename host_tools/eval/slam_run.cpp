@@ -224,6 +224,7 @@ void SlamSession::predict(double v_mps, double w_radps, double dt_s, double sigm
 
 void SlamSession::relocalise(const Eigen::Matrix3d& P) {
   check(st_->step.relocalise(st_->step.slam().pose(), P), "relocalise");
+  st_->step.lost();  // the relocaliser, when on, takes over (as a device does on RELOCALISE)
 }
 
 void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2<double>* truth) {
@@ -239,13 +240,23 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   }
   s.obs.clear();
   for (const SimObservation& o : scan) check(s.obs.push(o.z, o.R), "push");
-  ekf::LocalMapStats ls;
-  check(s.step.prepare(ls), "predict_local");
   const auto t0 = std::chrono::steady_clock::now();
-  if (s.opt.oracle) {
-    oracle_associate(s, scan);
+  node::RelocStats reloc;
+  check(s.step.localise(s.obs, reloc), "localise");
+  const bool lost = s.step.localisation() == node::Localisation::kLost;
+  if (lost) {  // not aligned: the scan is not used
+    node::SlamStep<double, EB>::unused(s.obs, s.result);
+    s.out.count = s.obs.count;
+    s.out.diag = AssociationDiagnostics{};
+    for (int i = 0; i < s.obs.count; ++i) s.out.feature[i] = kUnmatched;
   } else {
-    check(s.step.associate_prepared(s.obs, s.out), "associate");
+    ekf::LocalMapStats ls;
+    check(s.step.prepare(ls), "predict_local");
+    if (s.opt.oracle) {
+      oracle_associate(s, scan);
+    } else {
+      check(s.step.associate_prepared(s.obs, s.out), "associate");
+    }
   }
   const double assoc_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.association_s += assoc_s;
@@ -260,7 +271,11 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   sc.score(s.truth, s.paired);
   const int scan_tp = res.score.tp - tp0, scan_fp = res.score.fp - fp0;
   // Update, augment and review: the device's code (node::SlamStep).
-  check(s.step.commit(s.obs, s.out, s.result), "update");
+  if (!lost) {
+    check(s.step.commit(s.obs, s.out, s.result), "update");
+    s.step.confirm(s.result, s.out.jointly_compatible, reloc);
+  }
+  res.relocalisations += reloc.relocalised;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
     if (o == node::Outcome::kNotAugmented) throw std::runtime_error("augment: map capacity exceeded");
@@ -284,6 +299,8 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
   sc.pose(t_s, *truth, slam.pose(), P);
+  res.steps.back().lost = reloc.state == node::Localisation::kLost;
+  res.steps.back().declared_found = reloc.found;
   int paired = 0;
   double nis = 0;
   for (std::size_t i = 0; i < scan.size(); ++i) {
@@ -297,19 +314,37 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   res.steps.back().assoc_s = assoc_s;
 }
 
-int relocalised_at(const RunResult& r, double kidnap_t_s, int window) {
-  int first = -1;  // index into r.steps of the first scan after the kidnap
-  for (std::size_t k = 0; k < r.steps.size() && first < 0; ++k)
-    if (r.steps[k].t_s >= kidnap_t_s) first = static_cast<int>(k);
-  if (first < 0) return 0;
+bool pose_right(const StepRecord& k) {
+  const double ex = k.estimate.x - k.truth.x, ey = k.estimate.y - k.truth.y;
+  const double et = wrap_angle(k.estimate.theta - k.truth.theta);
+  return std::hypot(ex, ey) < 1.0 && std::abs(et) < 5.0 * kPi<double> / 180 && ex * ex <= 9 * k.var_x &&
+         ey * ey <= 9 * k.var_y && et * et <= 9 * k.var_theta;
+}
+
+KidnapScore kidnap_score(const RunResult& r, double kidnap_t_s, int window) {
+  KidnapScore out;
   const int n = static_cast<int>(r.steps.size());
-  for (int k = first; k < n; ++k) {  // the earliest scan that pairs >= 2 correctly, then no false pair
-    if (r.steps[static_cast<std::size_t>(k)].tp < 2) continue;
-    bool clean = true;
-    for (int q = k; q < n && q < k + window && clean; ++q) clean = r.steps[static_cast<std::size_t>(q)].fp == 0;
-    if (clean) return k - first + 1;
+  int first = n;  // index into r.steps of the first scan after the kidnap
+  for (int k = 0; k < n && first == n; ++k)
+    if (r.steps[static_cast<std::size_t>(k)].t_s >= kidnap_t_s) first = k;
+  auto at = [&](int k) -> const StepRecord& { return r.steps[static_cast<std::size_t>(k)]; };
+  for (int k = 0; k < first; ++k) out.anees_before += at(k).pose_nees;
+  if (first > 0) out.anees_before /= first;
+  for (int k = first; k < n; ++k) {
+    out.anees_after += at(k).pose_nees;
+    out.pose_error_after_m += std::hypot(at(k).estimate.x - at(k).truth.x, at(k).estimate.y - at(k).truth.y);
+    out.false_relocalisation = out.false_relocalisation || (at(k).declared_found && !pose_right(at(k)));
   }
-  return 0;
+  if (n > first) {
+    out.anees_after /= n - first;
+    out.pose_error_after_m /= n - first;
+  }
+  for (int k = first; k < n && out.found_at == 0; ++k) {
+    bool right = true;
+    for (int q = k; q < n && q < k + window && right; ++q) right = pose_right(at(q)) && at(q).fp == 0;
+    if (right) out.found_at = k - first + 1;
+  }
+  return out;
 }
 
 RunResult SlamSession::finish() {

@@ -137,6 +137,16 @@ void LinkSession::odometry(const proto::Odometry& o) {
   });
 }
 
+void LinkSession::relocalise(const proto::Relocalise& r) {
+  bool sent = false;
+  guarded("RELOCALISE", true, [&] {
+    if (!sent) {
+      sent = true;
+      client_->relocalise(r);
+    }
+  });
+}
+
 void LinkSession::send_scan(const LinkObsBatch& b) {
   bool sent = false;
   guarded("OBS_BATCH", true, [&] {

@@ -106,6 +106,13 @@ proto::Odometry link_odometry(const RunInput& in) {
   return o;
 }
 
+proto::Relocalise link_relocalise(const Eigen::Matrix3d& P) {
+  proto::Relocalise m;
+  m.cov_upper = {static_cast<float>(P(0, 0)), static_cast<float>(P(0, 1)), static_cast<float>(P(0, 2)),
+                 static_cast<float>(P(1, 1)), static_cast<float>(P(1, 2)), static_cast<float>(P(2, 2))};
+  return m;
+}
+
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step) {
   return link_odometry(SimSource::prediction(sc, step));
 }
@@ -196,7 +203,10 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
 
   RunInput in;
   while (src.next(in)) {
-    if (in.relocalise) throw std::runtime_error("a kidnap (relocalisation) is not carried by the serial protocol");
+    if (in.relocalise) {
+      link.relocalise(link_relocalise(in.pose_cov));
+      continue;
+    }
     if (!in.scan) {
       link.odometry(link_odometry(in));
       continue;

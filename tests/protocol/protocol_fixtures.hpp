@@ -79,6 +79,14 @@ inline Config sample<Config>() {
   c.static_gate_level = 0.95f;
   c.first_estimates_jacobians = false;
   c.augment = false;
+  c.relocalise = true;
+  c.reloc_lost_position_var_m2 = 16.0f;
+  c.reloc_lost_heading_var_rad2 = 0.5f;
+  c.reloc_min_inliers = 6;
+  c.reloc_margin = 3;
+  c.reloc_base_pairs = 5;
+  c.reloc_inflation = 9.0f;
+  c.reloc_confirm_scans = 2;
   c.stats_period_scans = 0x1234;
   return c;
 }
@@ -123,6 +131,12 @@ inline Shutdown sample<Shutdown>() {
   Shutdown s{};
   s.exit_code = 0xA7;
   return s;
+}
+template <>
+inline Relocalise sample<Relocalise>() {
+  Relocalise r{};
+  r.cov_upper = {225.0f, 0.5f, -0.25f, 196.0f, 0.125f, 9.5f};
+  return r;
 }
 template <>
 inline Odometry sample<Odometry>() {

@@ -69,6 +69,14 @@ class Options(TypedDict, total=False):
     static_gate_level: float  # default 0
     first_estimates_jacobians: bool  # default 1
     augment: bool  # default 1
+    relocalise: bool  # default 0
+    reloc_lost_position_var_m2: float  # default 25
+    reloc_lost_heading_var_rad2: float  # default 0.25
+    reloc_min_inliers: int  # default 5
+    reloc_margin: int  # default 2
+    reloc_base_pairs: int  # default 4
+    reloc_inflation: float  # default 4
+    reloc_confirm_scans: int  # default 1
 
 
 class AssociationResult(TypedDict):

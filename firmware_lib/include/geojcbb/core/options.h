@@ -82,7 +82,23 @@
   X(BOOL, first_estimates_jacobians, 1, (ANY, 0, 0), "", "--fej", \
     "first-estimates Jacobians (off: every Jacobian at the current estimate); applied at the next reset") \
   X(BOOL, augment, 1, (ANY, 0, 0), "", "", \
-    "add new landmarks (off: a known, fixed map; the host sets it with --known-map)")
+    "add new landmarks (off: a known, fixed map; the host sets it with --known-map)") \
+  X(BOOL, relocalise, 0, (ANY, 0, 0), "", "--relocalise", \
+    "when lost, align each scan against the map (pose-free) and resume at a unique, confirmed pose") \
+  X(REAL, reloc_lost_position_var_m2, 25, (GT, 0, 0), "m^2", "--reloc-lost-var", \
+    "the robot is lost when its position variance P_xx + P_yy reaches this") \
+  X(REAL, reloc_lost_heading_var_rad2, 0.25, (GT, 0, 0), "rad^2", "--reloc-lost-heading-var", \
+    "the robot is lost when its heading variance reaches this") \
+  X(INT, reloc_min_inliers, 5, (CLOSED, 3, 255), "", "--reloc-min-inliers", \
+    "landmarks an aligned pose must explain, and a confirming scan pair") \
+  X(INT, reloc_margin, 2, (CLOSED, 1, 255), "", "--reloc-margin", \
+    "inliers by which the aligned pose must lead the best distinct pose") \
+  X(INT, reloc_base_pairs, 4, (CLOSED, 1, 8), "", "--reloc-base-pairs", \
+    "observed pairs (the longest) whose matches in the map are tried per lost scan") \
+  X(REAL, reloc_inflation, 4, (GE, 1, 0), "", "--reloc-inflation", \
+    "the aligned pose's covariance is the fit's times this (the scan is then used again in the update)") \
+  X(INT, reloc_confirm_scans, 1, (CLOSED, 0, 16), "", "--reloc-confirm-scans", \
+    "scans after the relocalisation that must pair reloc_min_inliers landmarks before the robot is found")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

@@ -299,6 +299,7 @@ class Node {
         if (e == proto::Error::kOk) on_message(rx_config_);
         break;
       case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
+      case proto::MsgType::kRelocalise: e = serve<proto::Relocalise>(f); break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
       case proto::MsgType::kStatsRequest: e = serve<proto::StatsRequest>(f); break;
@@ -369,6 +370,19 @@ class Node {
     reset_ = true;
     new_run();
     ack();
+  }
+
+  void on_message(const proto::Relocalise& m) {
+    if (!running() || !fresh()) return;  // a retransmitted RELOCALISE was applied already
+    const auto& u = m.cov_upper;
+    Mat3<T> P;
+    P << T(u[0]), T(u[1]), T(u[2]), T(u[1]), T(u[3]), T(u[4]), T(u[2]), T(u[4]), T(u[5]);
+    if (step_.relocalise(step_.slam().pose(), P) != Status::kOk) {
+      invalid();
+      return;
+    }
+    step_.lost();
+    applied();
   }
 
   void on_message(const proto::Shutdown& m) {

@@ -36,6 +36,9 @@ struct ReportRow {
   double duplicates = NAN;   ///< map landmarks beyond one per true landmark, at the end, mean over runs
   double ms_median = NAN, ms_p90 = NAN, ms_max = NAN;  ///< per-scan association time over every scan [ms]
   int reloc_runs = 0, reloc_found3 = 0;                ///< kidnap scenes: runs, and runs relocalised within 3 scans
+  int reloc_false = 0;                                 ///< runs with a false relocalisation
+  double reloc_error_m = NAN;                          ///< mean position error after the kidnap [m]
+  double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
 
 inline double accuracy(const Score& s) {
@@ -111,12 +114,16 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   for (const ReportRow& r : rows) kidnap = kidnap || r.reloc_runs > 0;
   if (kidnap) {
     std::fprintf(f,
-                 "Relocalisation: runs found within 3 scans of the kidnap (a scan with >= 2 correct pairings, then 10 "
-                 "scans without a false pairing)\n");
+                 "Relocalisation: runs found within 3 scans of the kidnap (from that scan on, 10 scans with the pose "
+                 "within 1 m, 5 deg and 3 sigma, and no false pairing); runs that declared themselves found with a "
+                 "wrong pose; means after the kidnap\n");
+    std::fprintf(f, "  %-9s %19s %12s %14s %12s %12s\n", "strategy", "found in 3 scans", "false reloc", "pose err [m]",
+                 "ANEES before", "ANEES after");
     for (const ReportRow& r : rows) {
       if (r.reloc_runs > 0)
-        std::fprintf(f, "  %-9s %4d / %4d (%5.1f%%)\n", r.name.c_str(), r.reloc_found3, r.reloc_runs,
-                     100.0 * r.reloc_found3 / r.reloc_runs);
+        std::fprintf(f, "  %-9s %4d / %4d (%5.1f%%) %12d %14.3f %12.2f %12.2f\n", r.name.c_str(), r.reloc_found3,
+                     r.reloc_runs, 100.0 * r.reloc_found3 / r.reloc_runs, r.reloc_false, r.reloc_error_m,
+                     r.reloc_anees_before, r.reloc_anees_after);
     }
   }
   if (scores) {
@@ -176,7 +183,11 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"association_ms_p90", num(r.ms_p90)},
                  {"association_ms_max", num(r.ms_max)},
                  {"relocalisation_runs", r.reloc_runs},
-                 {"relocalised_within_3_scans", r.reloc_found3}});
+                 {"relocalised_within_3_scans", r.reloc_found3},
+                 {"false_relocalisations", r.reloc_false},
+                 {"pose_error_after_kidnap_m", num(r.reloc_error_m)},
+                 {"anees_before_kidnap", num(r.reloc_anees_before)},
+                 {"anees_after_kidnap", num(r.reloc_anees_after)}});
   }
   return a;
 }

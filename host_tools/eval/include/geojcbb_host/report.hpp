@@ -25,7 +25,9 @@ struct RunAggregate {
   std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
   std::vector<double> scan_ms;                      ///< every scan's association time [ms]
   int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
-  RunResult first;                                  ///< the run the path figure shows (set by the caller)
+  int reloc_false = 0;                              ///< runs with a false relocalisation
+  double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
+  RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;
   std::string error;  ///< of the last failed run
 

@@ -97,13 +97,15 @@ std::vector<Method> select_methods(const std::vector<std::string>& names, bool a
 struct StepRecord {
   double t_s;
   Pose2<double> truth, estimate;
-  double var_x, var_y;   ///< pose variances [m^2]
-  double pose_nees;      ///< (x, y, theta) NEES
-  double var_theta = 0;  ///< heading variance [rad^2]
-  int paired = 0;        ///< pairings of the scan
-  double nis_sum = 0;    ///< sum of their individual NIS (d2, 2 dof each)
-  int tp = 0, fp = 0;    ///< correct and false pairings of the scan
-  double assoc_s = 0;    ///< the scan's association time
+  double var_x, var_y;          ///< pose variances [m^2]
+  double pose_nees;             ///< (x, y, theta) NEES
+  double var_theta = 0;         ///< heading variance [rad^2]
+  int paired = 0;               ///< pairings of the scan
+  double nis_sum = 0;           ///< sum of their individual NIS (d2, 2 dof each)
+  int tp = 0, fp = 0;           ///< correct and false pairings of the scan
+  double assoc_s = 0;           ///< the scan's association time
+  bool lost = false;            ///< the relocaliser's state after the scan: lost
+  bool declared_found = false;  ///< the relocaliser confirmed its pose at this scan (found)
 };
 
 struct RunResult {
@@ -121,6 +123,7 @@ struct RunResult {
   std::vector<MapLandmark> map;        ///< the final map
   int dropped_observations = 0;        ///< over the observation capacity in a scan
   int budget_hits = 0;                 ///< scans whose JCBB node budget ran out
+  int relocalisations = 0;             ///< poses the relocaliser accepted
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,
          mean_abs_y_m = 0;        ///< over the scans with a true pose
@@ -171,12 +174,24 @@ class RunScorer {
   RunResult res_;
 };
 
-/// Relocalisation (a scenario with a kidnap at kidnap_t_s): the first scan after the kidnap (counted
-/// from 1) that pairs at least two landmarks correctly and from which on `window` scans (2 s at
-/// 0.2 s per scan for 10) have no false pairing: the robot has found itself there. 0: never. (A
-/// window, not the rest of the run: a clutter return paired a minute later is not a failure to
-/// relocalise.)
-int relocalised_at(const RunResult& r, double kidnap_t_s, int window = 10);
+/// A scan's pose is right: within 1 m and 5 degrees of the truth, and each of x, y, theta within 3
+/// sigma of its variance.
+bool pose_right(const StepRecord& k);
+
+/// A kidnap scene (kidnap at kidnap_t_s), scored by the pose, not by the pairings alone.
+struct KidnapScore {
+  /// The first scan after the kidnap (counted from 1) from which on, for `window` scans (fewer at the
+  /// run's end), the pose is right (pose_right) and no pairing is false: the robot has found itself
+  /// there. 0: never. (A window, not the rest of the run: a clutter return paired a minute later is
+  /// not a failure to relocalise.)
+  int found_at = 0;
+  /// The relocaliser declared itself found at a scan whose pose was not right.
+  bool false_relocalisation = false;
+  double pose_error_after_m = 0;  ///< mean position error over the scans after the kidnap [m]
+  double anees_before = 0;        ///< mean NEES over the scans before the kidnap
+  double anees_after = 0;         ///< ... and after it
+};
+KidnapScore kidnap_score(const RunResult& r, double kidnap_t_s, int window = 10);
 
 /// One input of a run, in time order: a prediction (odometry over dt and its noise) or a scan.
 struct RunInput {

@@ -57,6 +57,8 @@ class LinkClient {
   void configure(const proto::Config& c);
   void reset(const proto::Reset& r);
   void odometry(const proto::Odometry& o);
+  /// RELOCALISE, a stream frame as ODOMETRY: the pose covariance re-set (the relocaliser then takes over).
+  void relocalise(const proto::Relocalise& r);
   struct ScanReply {
     LinkAssocResult result;
     proto::Pose pose;

@@ -40,6 +40,8 @@ proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0);
 proto::Reset link_reset(const Scenario& sc);
 proto::Odometry link_odometry(const RunInput& in);
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step);
+/// A kidnap's pose covariance as RELOCALISE (float32 on the wire).
+proto::Relocalise link_relocalise(const Eigen::Matrix3d& P);
 /// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with its
 /// covariance; `kept` receives their truths.
 LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::size_t max_obs,
@@ -56,6 +58,8 @@ class ScanLink {
   virtual void configure(const proto::Config& c) = 0;
   virtual void reset(const proto::Reset& r) = 0;
   virtual void odometry(const proto::Odometry& o) = 0;
+  /// RELOCALISE (a stream frame, as ODOMETRY).
+  virtual void relocalise(const proto::Relocalise& r) = 0;
   virtual void send_scan(const LinkObsBatch& b) = 0;
   virtual LinkClient::ScanReply receive_scan(std::uint32_t batch_id) = 0;
   /// The device's CAPABILITIES (capacity, boot id).
@@ -69,6 +73,7 @@ class PlainLink : public ScanLink {
   void configure(const proto::Config& c) override { c_.configure(c); }
   void reset(const proto::Reset& r) override { c_.reset(r); }
   void odometry(const proto::Odometry& o) override { c_.odometry(o); }
+  void relocalise(const proto::Relocalise& r) override { c_.relocalise(r); }
   void send_scan(const LinkObsBatch& b) override { c_.send_scan(b); }
   LinkClient::ScanReply receive_scan(std::uint32_t id) override { return c_.receive_scan(id); }
   const proto::Capabilities& capabilities() const override { return c_.capabilities(); }

@@ -30,6 +30,7 @@ enum class MsgType : std::uint8_t {
   kPong = 0x07,
   kReset = 0x08,         ///< host -> device, acknowledged
   kShutdown = 0x09,      ///< host -> device, acknowledged, then the board's shutdown hook
+  kRelocalise = 0x0A,    ///< host -> device, stream
   kOdometry = 0x10,      ///< host -> device, stream
   kObsBatch = 0x11,      ///< host -> device, stream
   kAssocResult = 0x20,   ///< device -> host
@@ -197,6 +198,14 @@ struct Config : Codec<Config> {
   float static_gate_level = 0.0f;  ///< [0, 1)
   bool first_estimates_jacobians = true;
   bool augment = true;
+  bool relocalise = false;                    ///< the pose-free relocaliser
+  float reloc_lost_position_var_m2 = 25.0f;   ///< > 0
+  float reloc_lost_heading_var_rad2 = 0.25f;  ///< > 0
+  std::uint8_t reloc_min_inliers = 5;         ///< >= 3
+  std::uint8_t reloc_margin = 2;              ///< >= 1
+  std::uint8_t reloc_base_pairs = 4;          ///< 1 .. 8
+  float reloc_inflation = 4.0f;               ///< >= 1
+  std::uint8_t reloc_confirm_scans = 1;       ///< 0 .. 16
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -241,6 +250,16 @@ struct Config : Codec<Config> {
         field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
               "applied at the next RESET"),
         field("augment", &Config::augment, range::one_of(0, 1), "", "0: a fixed map, nothing added"),
+        field("relocalise", &Config::relocalise, range::one_of(0, 1), "", "the pose-free relocaliser when lost"),
+        field("reloc_lost_position_var_m2", &Config::reloc_lost_position_var_m2, range::above(0.0f), "m^2",
+              "lost when P_xx + P_yy reaches this"),
+        field("reloc_lost_heading_var_rad2", &Config::reloc_lost_heading_var_rad2, range::above(0.0f), "rad^2",
+              "lost when P_thth reaches this"),
+        field("reloc_min_inliers", &Config::reloc_min_inliers, range::at_least(3)),
+        field("reloc_margin", &Config::reloc_margin, range::at_least(1)),
+        field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
+        field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
+        field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -310,6 +329,27 @@ struct Reset : Codec<Reset> {
         field("theta_rad", &Reset::theta_rad, range::finite(), "rad"),
         field("cov_upper", &Reset::cov_upper, range::finite(), "",
               "P over (x, y, theta), symmetric by construction: positive definite", detail::kCovUpperNames));
+  }
+  [[nodiscard]] Error rule() const { return detail::spd3(cov_upper) ? Error::kOk : Error::kNotPositiveDefinite; }
+};
+
+/// RELOCALISE, host -> device (stream: ordered with ODOMETRY and OBS_BATCH, as ODOMETRY): the robot
+/// was carried or its pose is known to be wrong. The pose covariance is re-set to cov_upper and its
+/// correlation with the map dropped (the estimate and the map kept); with the relocaliser on
+/// (CONFIG relocalise) the robot is then lost: each scan is aligned against the map until a pose is
+/// accepted and confirmed.
+struct Relocalise : Codec<Relocalise> {
+  static constexpr MsgType kType = MsgType::kRelocalise;
+  static constexpr const char* kName = "RELOCALISE";
+  static constexpr const char* kRule = "positive-definite";
+
+  /// Pose covariance, upper triangle (p00, p01, p02, p11, p12, p22) over (x, y, theta).
+  std::array<float, 6> cov_upper{1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f};
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("cov_upper", &Relocalise::cov_upper, range::finite(), "",
+                                 "P over (x, y, theta), symmetric by construction: positive definite",
+                                 detail::kCovUpperNames));
   }
   [[nodiscard]] Error rule() const { return detail::spd3(cov_upper) ? Error::kOk : Error::kNotPositiveDefinite; }
 };
@@ -558,8 +598,9 @@ struct MessageList {
   static constexpr std::size_t kSize = sizeof...(M);
 };
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
-using AllMessages = MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Odometry,
-                                ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
+using AllMessages =
+    MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry,
+                ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
 
 namespace detail {
 template <class... M>
@@ -633,10 +674,10 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 79 &&
-                  Reset::kPayloadSize == 36 && Odometry::kPayloadSize == 20 && Pose::kPayloadSize == 42 &&
-                  Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
-                  AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 96 &&
+                  Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
+                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 &&
+                  ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto

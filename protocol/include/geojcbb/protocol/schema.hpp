@@ -211,15 +211,15 @@ constexpr void render_message_line(FixedText<N>& t) {
 
 /// One message's line, and its FNV-1a hash (a test builds it for two orders of the same fields).
 template <class M>
-constexpr FixedText<1024> message_line() {
-  FixedText<1024> t{};
+constexpr FixedText<2048> message_line() {
+  FixedText<2048> t{};
   render_message_line<M>(t);
   return t;
 }
 template <class M>
 constexpr std::uint32_t message_hash() {
-  constexpr FixedText<1024> t = message_line<M>();
-  static_assert(!t.overflow, "a message line over 1023 characters");
+  constexpr FixedText<2048> t = message_line<M>();
+  static_assert(!t.overflow, "a message line over 2047 characters");
   return fnv1a32(t.data.data(), t.size);
 }
 

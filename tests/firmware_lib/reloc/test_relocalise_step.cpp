@@ -1,0 +1,207 @@
+// The relocaliser in the SLAM step (node/slam_step.hpp) and on the wire (RELOCALISE): a constructed
+// kidnap found in one scan and confirmed on the next; a wrong confirming scan sends the robot back to
+// lost with the covariance it had; a lost scan that cannot be aligned changes nothing but the state;
+// the relocaliser off leaves the step as it was; a device given RELOCALISE re-sets its covariance and is
+// lost; no allocation.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "geojcbb/node/node.hpp"
+#include "support/alloc_counter.hpp"
+
+using namespace geojcbb;
+using geojcbb::test::allocations_during;
+
+namespace {
+
+using B = DefaultBounds;
+
+/// 60 landmarks at least 3 m apart in a 50 m square (a fixed seed).
+std::vector<Eigen::Vector2d> make_map() {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-25, 25);
+  std::vector<Eigen::Vector2d> map;
+  while (map.size() < 60) {
+    const Eigen::Vector2d p(u(rng), u(rng));
+    bool ok = true;
+    for (const auto& q : map) ok = ok && (p - q).norm() >= 3;
+    if (ok) map.push_back(p);
+  }
+  return map;
+}
+
+/// The landmarks within 20 m ahead of `x` as observations (noise-free; R for 0.1 m and 1 degree).
+template <typename T>
+void observe_from(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x, Observations<T, B>& obs) {
+  obs.clear();
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  for (const auto& l : map) {
+    const double dx = l.x() - x.x, dy = l.y() - x.y;
+    const double r = std::hypot(dx, dy), b = wrap_angle(std::atan2(dy, dx) - x.theta);
+    if (r > 20 || std::abs(b) > 1.5 || obs.count >= B::kMaxObservations) continue;
+    REQUIRE(obs.push(Vec2<T>(T(r), T(b)), R) == Status::kOk);
+  }
+}
+
+template <typename T>
+struct Rig {
+  node::SlamStep<T, B> step;
+  Observations<T, B> obs;
+  node::StepResult<T, B> out;
+};
+
+/// A step with the relocaliser, the map known (the true landmarks), the robot at `x0`.
+template <typename T>
+std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x0, bool reloc = true) {
+  auto rig = std::make_unique<Rig<T>>();
+  StepSettings<T> s;
+  s.strategy = Strategy::kJcbb;
+  s.local_radius_m = T(25);
+  s.max_range_m = T(20);
+  s.half_fov_rad = T(1.5);
+  s.augment = false;
+  s.confirm_hits = 1;
+  s.relocalise = reloc;
+  REQUIRE(rig->step.configure(s) == Status::kOk);
+  REQUIRE(rig->step.reset(Pose2<T>{T(x0.x), T(x0.y), T(x0.theta)}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
+  for (const auto& l : map) {
+    FeatureId id = -1;
+    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+  }
+  return rig;
+}
+
+Mat3<double> kidnap_cov() { return Vec3<double>(225, 225, 9.8).asDiagonal(); }
+
+template <typename T>
+double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
+  return std::hypot(double(s.slam().pose().x) - x.x, double(s.slam().pose().y) - x.y);
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on the next", T, float, double) {
+  const auto map = make_map();
+  const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4};  // carried 14 m and 120 degrees
+  auto rig = make_rig<T>(map, before);
+  REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
+  rig->step.lost();
+  CHECK(rig->step.localisation() == node::Localisation::kLost);
+  observe_from(map, after, rig->obs);
+  REQUIRE(rig->obs.count >= 6);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.aligned);
+  CHECK(rig->out.reloc.relocalised);
+  CHECK(!rig->out.reloc.found);
+  CHECK(rig->out.reloc.state == node::Localisation::kConfirming);
+  CHECK(position_error(rig->step, after) < 0.05);
+  CHECK(std::abs(wrap_angle(double(rig->step.slam().pose().theta) - after.theta)) < 0.005);
+  int paired = 0;
+  for (int i = 0; i < rig->out.count; ++i) paired += rig->out.outcome[i] == node::Outcome::kPaired;
+  CHECK(paired == rig->obs.count);  // associated as usual at the aligned pose
+  // The next scan (the robot did not move) confirms it.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.found);
+  CHECK(!rig->out.reloc.aligned);
+  CHECK(rig->step.localisation() == node::Localisation::kTracking);
+}
+
+TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the robot back to lost", T, float, double) {
+  const auto map = make_map();
+  const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4}, elsewhere{-8, 6, -1.0};
+  auto rig = make_rig<T>(map, before);
+  REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
+  rig->step.lost();
+  observe_from(map, after, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  REQUIRE(rig->out.reloc.relocalised);
+  // Carried again before the confirming scan: what it sees does not fit the aligned pose.
+  observe_from(map, elsewhere, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.rejected);
+  CHECK(rig->step.localisation() == node::Localisation::kLost);
+  CHECK(double(rig->step.slam().cov(0, 0)) == doctest::Approx(225).epsilon(1e-6));
+  CHECK(double(rig->step.slam().cov(2, 2)) == doctest::Approx(9.8).epsilon(1e-6));
+  // And the scan after finds it where it is.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.relocalised);
+  CHECK(position_error(rig->step, elsewhere) < 0.05);
+}
+
+TEST_CASE_TEMPLATE("reloc step: a lost scan that cannot be aligned changes nothing", T, float, double) {
+  const auto map = make_map();
+  const Pose2<double> before{-5, -5, 0.3};
+  auto rig = make_rig<T>(map, before);
+  REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
+  rig->step.lost();
+  // Two observations: too few for a pose.
+  rig->obs.clear();
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  REQUIRE(rig->obs.push(Vec2<T>(T(5), T(0.1)), R) == Status::kOk);
+  REQUIRE(rig->obs.push(Vec2<T>(T(9), T(-0.4)), R) == Status::kOk);
+  const Pose2<T> x = rig->step.slam().pose();
+  const int n = rig->step.slam().landmarks();
+  std::uint64_t allocations = 0;
+  Status st = Status::kNoConvergence;
+  allocations = allocations_during([&] { st = rig->step.step(rig->obs, rig->out); });
+  REQUIRE(st == Status::kOk);
+  CHECK(allocations == 0);
+  CHECK(rig->out.reloc.aligned);
+  CHECK(!rig->out.reloc.relocalised);
+  CHECK(rig->step.localisation() == node::Localisation::kLost);
+  CHECK(rig->step.slam().pose().x == x.x);
+  CHECK(rig->step.slam().pose().theta == x.theta);
+  CHECK(rig->step.slam().landmarks() == n);
+  for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kUnmatched);
+}
+
+TEST_CASE("reloc step: the relocaliser off, lost() and a large covariance change nothing") {
+  const auto map = make_map();
+  const Pose2<double> before{-5, -5, 0.3};
+  auto rig = make_rig<double>(map, before, false);
+  REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov()) == Status::kOk);
+  rig->step.lost();
+  CHECK(rig->step.localisation() == node::Localisation::kTracking);
+  observe_from(map, before, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(!rig->out.reloc.aligned);
+  CHECK(rig->out.reloc.state == node::Localisation::kTracking);
+}
+
+TEST_CASE("reloc step: a device given RELOCALISE re-sets its covariance and is lost") {
+  using NB = DefaultBounds;
+  auto node = std::make_unique<node::Node<float, NB>>();
+  std::vector<std::uint8_t> sink;
+  node->start(node::Output{&sink,
+                           [](void* c, const std::uint8_t* p, std::size_t n) {
+                             auto& b = *static_cast<std::vector<std::uint8_t>*>(c);
+                             b.insert(b.end(), p, p + n);
+                           }},
+              7);
+  auto feed = [&](const auto& m, std::uint16_t seq) {
+    proto::EncodedFrame f;
+    REQUIRE(proto::encode_message(m, seq, 0, f) == proto::Error::kOk);
+    node->on_bytes(f.bytes.data(), f.size);
+  };
+  feed(proto::Hello{}, 0);
+  proto::Config c;
+  c.relocalise = true;
+  feed(c, 1);
+  feed(proto::Reset{}, 2);
+  proto::Relocalise r;
+  r.cov_upper = {225.0f, 0.0f, 0.0f, 225.0f, 0.0f, 9.8f};
+  feed(r, 3);
+  CHECK(node->slam_step().slam().cov(0, 0) == 225.0f);
+  CHECK(node->slam_step().slam().cov(2, 2) == 9.8f);
+  CHECK(node->slam_step().localisation() == node::Localisation::kLost);
+  // A retransmission (the same seq) is not applied twice.
+  r.cov_upper = {1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f};
+  feed(r, 3);
+  CHECK(node->slam_step().slam().cov(0, 0) == 225.0f);
+}
