@@ -29,6 +29,7 @@ struct Budget {
   std::vector<std::uint32_t> predict_local, update, augment_review;  ///< the step's other stages (CSV only)
   std::vector<std::uint32_t> associate20;  ///< association of scans with at least 20 observations
   std::vector<std::uint32_t> budget_hit;   ///< association of scans that hit the JCBB node budget
+  std::vector<std::uint32_t> relocalise;   ///< the relocaliser's alignment, of the scans that ran it
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
 };
@@ -66,6 +67,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       b.predict_local.push_back(st.instr_predict_local);
       b.update.push_back(st.instr_update);
       b.augment_review.push_back(st.instr_augment_review);
+      if (st.instr_relocalise > 0) b.relocalise.push_back(st.instr_relocalise);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -245,6 +247,13 @@ int run(int argc, char** argv) {
         std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", strategies[k].name(), median(b.associate),
                     maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(), median(b.associate20),
                     maximum(b.associate20));
+      }
+      for (std::size_t k = 0; k < strategies.size(); ++k) {
+        const Budget& b = budgets[k];
+        if (!b.relocalise.empty()) {
+          std::printf("  %-8s %zu lost scans aligned against the map: median %u, max %u instructions\n",
+                      strategies[k].name(), b.relocalise.size(), median(b.relocalise), maximum(b.relocalise));
+        }
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];

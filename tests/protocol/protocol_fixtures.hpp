@@ -210,6 +210,7 @@ inline Stats sample<Stats>() {
   s.instr_associate = 250000;
   s.instr_update = 90000;
   s.instr_augment_review = 15000;
+  s.instr_relocalise = 250000;
   s.instr_step = 360000;
   s.stack_high_water_bytes = 2048;
   return s;

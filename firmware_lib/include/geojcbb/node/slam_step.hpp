@@ -52,6 +52,7 @@ struct RelocStats {
 /// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without).
 struct StageCounts {
   std::uint32_t predict_local = 0, associate = 0, update = 0, augment_review = 0, total = 0;
+  std::uint32_t relocalise = 0;  ///< the alignment of a lost scan (0 otherwise)
 };
 
 template <typename T, class B>
@@ -153,10 +154,12 @@ class SlamStep {
     RelocStats rs;
     Status st = localise(obs, rs);
     if (st != Status::kOk) return st;
+    const std::uint32_t t_reloc = clock ? clock() : 0;
     if (state_ == Localisation::kLost) {  // not aligned: the scan is not used
       unused(obs, out);
       out.reloc = rs;
-      out.counts.total = (clock ? clock() : 0) - t0;
+      out.counts.relocalise = t_reloc - t0;
+      out.counts.total = t_reloc - t0;
       return Status::kOk;
     }
     ekf::LocalMapStats local;
@@ -169,7 +172,8 @@ class SlamStep {
     st = commit(obs, assoc_, out, clock);
     if (st != Status::kOk) return st;
     out.local = local;
-    out.counts.predict_local = t1 - t0;
+    out.counts.relocalise = t_reloc - t0;
+    out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
     out.counts.total += t2 - t0;
     confirm(out, assoc_.jointly_compatible, rs);

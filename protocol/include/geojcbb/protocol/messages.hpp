@@ -545,7 +545,8 @@ struct Stats : Codec<Stats> {
   std::uint32_t instr_associate = 0;
   std::uint32_t instr_update = 0;
   std::uint32_t instr_augment_review = 0;
-  std::uint32_t instr_step = 0;  ///< the whole step
+  std::uint32_t instr_relocalise = 0;  ///< the relocaliser's alignment (a lost scan)
+  std::uint32_t instr_step = 0;        ///< the whole step
   std::uint32_t stack_high_water_bytes = 0;
 
   static constexpr auto fields() {
@@ -567,6 +568,7 @@ struct Stats : Codec<Stats> {
         field("instr_associate", &Stats::instr_associate, range::any(), kInstr),
         field("instr_update", &Stats::instr_update, range::any(), kInstr),
         field("instr_augment_review", &Stats::instr_augment_review, range::any(), kInstr),
+        field("instr_relocalise", &Stats::instr_relocalise, range::any(), kInstr, "0 unless the robot was lost"),
         field("instr_step", &Stats::instr_step, range::any(), kInstr, "the whole step"),
         field("stack_high_water_bytes", &Stats::stack_high_water_bytes, range::any(), "B",
               "0 where the board does not measure it"));
@@ -676,7 +678,7 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 96 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 68 && ObsBatch::kFixedSize == 5 &&
+                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 72 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
 
