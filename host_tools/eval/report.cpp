@@ -28,6 +28,9 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   observations += r.observations;
   budget_hits += r.budget_hits;
   fp_clutter += r.fp_clutter;
+  fp_to_duplicate += r.fp_to_duplicate;
+  fp_to_original += r.fp_to_original;
+  runs_over_5_fp += r.score.fp > 5;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
   removed_true += r.removed_true_landmarks;
@@ -85,6 +88,9 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.reloc_runs = reloc_runs;
   row.reloc_found3 = reloc_found3;
   row.reloc_false = reloc_false;
+  row.fp_to_duplicate = fp_to_duplicate;
+  row.fp_to_original = fp_to_original;
+  row.runs_over_5_fp = runs_over_5_fp;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;
     row.reloc_anees_before = reloc_anees_before / reloc_runs;

@@ -24,7 +24,7 @@ void check(Status s, const char* what) {
 // ---------------------------------------------------------------------------------------------
 
 RunScorer::RunScorer(std::size_t true_landmarks, std::vector<int> landmark_group)
-    : mapped_(true_landmarks, 0), landmark_group_(std::move(landmark_group)) {
+    : mapped_(true_landmarks, 0), first_(true_landmarks, -1), landmark_group_(std::move(landmark_group)) {
   if (!landmark_group_.empty() && landmark_group_.size() != true_landmarks) {
     throw std::runtime_error("landmark_group: one entry per true landmark expected");
   }
@@ -46,6 +46,7 @@ void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId
       const int ft = truth_of(f);
       ++((t >= 0 && ft == t) ? res_.score.tp : res_.score.fp);
       res_.fp_clutter += t < 0;
+      if (t >= 0 && ft >= 0 && ft != t) ++(f > first_[static_cast<std::size_t>(ft)] ? res_.fp_to_duplicate : res_.fp_to_original);
       ++((t >= 0 && ft >= 0 && cls(ft) == cls(t)) ? res_.group_score.tp : res_.group_score.fp);
     } else if (known) {
       ++res_.score.fn;
@@ -64,6 +65,7 @@ void RunScorer::added(FeatureId id, int truth) {
   feature_truth_[k] = truth;
   if (truth >= 0) {
     ++mapped_[static_cast<std::size_t>(truth)];
+    if (first_[static_cast<std::size_t>(truth)] < 0) first_[static_cast<std::size_t>(truth)] = id;
   } else {
     ++res_.spurious_landmarks;
   }

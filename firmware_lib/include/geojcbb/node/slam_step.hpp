@@ -158,7 +158,7 @@ class SlamStep {
     if (state_ == Localisation::kLost) {  // not aligned: the scan is not used
       unused(obs, out);
       out.reloc = rs;
-      out.counts.relocalise = t_reloc - t0;
+      out.counts.relocalise = t_reloc - t0;  // aligned (the robot is lost)
       out.counts.total = t_reloc - t0;
       return Status::kOk;
     }
@@ -172,7 +172,7 @@ class SlamStep {
     st = commit(obs, assoc_, out, clock);
     if (st != Status::kOk) return st;
     out.local = local;
-    out.counts.relocalise = t_reloc - t0;
+    out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
     out.counts.total += t2 - t0;

@@ -103,6 +103,10 @@ struct AlignWorkspace {
   std::array<T, B::kMaxObservations> pick_d2;
   std::array<std::int8_t, 2 * kMaxBasePairs> base;  ///< observation pairs (a, b), longest first
   std::array<align_detail::Candidate<T>, kTopPoses> top;
+  std::array<Mat3<T>, kTopPoses> top_cov;  ///< the refined poses' fit covariances
+  std::array<int, kTopPoses> top_misses;
+  std::array<bool, kTopPoses> top_plausible;
+  std::array<T, kMaxBasePairs> base_len;
 
   void clear_map() { n = 0; }
   /// @return kOk; kCapacityExceeded when MaxLandmarks are in; kNonFinite; kNotPositiveDefinite
@@ -294,14 +298,18 @@ bool gauss_newton_step(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<
     J.col(2) = dRot * ws.q[i];
     const Vec2<T> r = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[ws.pick[i]];
     const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[ws.pick[i]];
-    const Eigen::LLT<Mat2<T>> llt(S);
-    if (llt.info() != Eigen::Success) return false;
-    info += J.transpose() * llt.solve(J);
-    grad += J.transpose() * llt.solve(r);
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(S(0, 0) > T(0) && det > T(0))) return false;
+    Mat2<T> W;  // S^-1 in closed form (a matrix right-hand side would take Eigen's blocked solver)
+    W << S(1, 1) / det, -S(0, 1) / det, -S(1, 0) / det, S(0, 0) / det;
+    info += J.transpose() * W * J;
+    grad += J.transpose() * (W * r);
   }
   const Eigen::LLT<Mat3<T>> llt(info);
   if (llt.info() != Eigen::Success) return false;
-  const Mat3<T> c = symmetric_part(Mat3<T>(llt.solve(Mat3<T>::Identity())));
+  Mat3<T> inv;
+  for (int k = 0; k < 3; ++k) inv.col(k) = llt.solve(Vec3<T>::Unit(k));  // <= 3: vector solves
+  const Mat3<T> c = symmetric_part(inv);
   const Vec3<T> dx = -(c * grad);
   if (!all_finite(c) || !all_finite(dx)) return false;
   x = Pose2<T>{x.x + dx(0), x.y + dx(1), wrap_angle(x.theta + dx(2))};
@@ -371,7 +379,7 @@ template <typename T, class B>
   }
   // Base pairs: the longest observed pairs, longest first (insertion into a short list).
   int bases = 0;
-  std::array<T, kMaxBasePairs> base_len{};
+  std::array<T, kMaxBasePairs>& base_len = ws.base_len;
   for (int a = 0; a < m; ++a) {        // <= kMaxObservations
     for (int b = a + 1; b < m; ++b) {  // <= kMaxObservations
       const T len = (ws.q[a] - ws.q[b]).norm();
@@ -438,14 +446,20 @@ template <typename T, class B>
   }
   // Each kept pose refined (exclusive inliers, Procrustes, Gauss-Newton) and its misses counted;
   // the best plausible one is the answer, the best plausible one distinct from it its rival.
-  AlignResult<T, B> r;
+  // (From here on nothing fails: `out` is written in place, a local result would take the frame
+  // over the controller's 512 bytes.)
+  AlignResult<T, B>& r = out;
+  r.accepted = false;
+  r.pose = Pose2<T>{};
+  r.cov = Mat3<T>::Zero();
+  r.inliers = r.misses = r.rival_inliers = 0;
   r.hypotheses = scored;
   r.truncated = truncated;
   for (int i = 0; i < m; ++i) r.landmark[i] = -1;  // <= kMaxObservations
   int best = -1, rival = -1;
-  std::array<Mat3<T>, kTopPoses> cov;
-  std::array<int, kTopPoses> miss{};
-  std::array<bool, kTopPoses> plausible{};
+  std::array<Mat3<T>, kTopPoses>& cov = ws.top_cov;
+  std::array<int, kTopPoses>& miss = ws.top_misses;
+  std::array<bool, kTopPoses>& plausible = ws.top_plausible;
   for (int k = 0; k < kept; ++k) {  // <= kTopPoses
     Candidate<T>& c = ws.top[k];
     bool ok = exclusive_inliers(ws, m, c.pose, opt.gate_d2) >= 3;
@@ -475,7 +489,6 @@ template <typename T, class B>
     r.cov = cov[best];
     for (int i = 0; i < m; ++i) r.landmark[i] = ws.pick[i] < 0 ? std::int16_t(-1) : ws.index[ws.pick[i]];
   }
-  out = r;
   return Status::kOk;
 }
 

@@ -37,6 +37,8 @@ struct ReportRow {
   double ms_median = NAN, ms_p90 = NAN, ms_max = NAN;  ///< per-scan association time over every scan [ms]
   int reloc_runs = 0, reloc_found3 = 0;                ///< kidnap scenes: runs, and runs relocalised within 3 scans
   int reloc_false = 0;                                 ///< runs with a false relocalisation
+  int fp_to_duplicate = 0, fp_to_original = 0;         ///< false pairs to a duplicate / to an original landmark
+  int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
   double reloc_error_m = NAN;                          ///< mean position error after the kidnap [m]
   double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
@@ -129,6 +131,16 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   if (scores) {
     std::fprintf(f, "Table 2: association accuracy (sums over the runs)\n");
     print_accuracy(rows, f);
+    std::fprintf(f,
+                 "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
+                 "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
+                 "clutter paired\n");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s\n", "strategy", "runs > 5", "duplicate", "original", "clutter");
+    for (const ReportRow& r : rows) {
+      if (r.runs > 0)
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d\n", r.name.c_str(), r.runs_over_5_fp, r.fp_to_duplicate,
+                     r.fp_to_original, r.fp_clutter);
+    }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
   std::fprintf(f, "  %-8s %10s %10s %10s %18s %12s %10s %10s\n", "strategy", "|x err| m", "|y err| m", "ANEES",
@@ -185,6 +197,9 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"relocalisation_runs", r.reloc_runs},
                  {"relocalised_within_3_scans", r.reloc_found3},
                  {"false_relocalisations", r.reloc_false},
+                 {"runs_over_5_false_pairs", r.runs_over_5_fp},
+                 {"false_pairs_to_duplicate", r.fp_to_duplicate},
+                 {"false_pairs_to_original", r.fp_to_original},
                  {"pose_error_after_kidnap_m", num(r.reloc_error_m)},
                  {"anees_before_kidnap", num(r.reloc_anees_before)},
                  {"anees_after_kidnap", num(r.reloc_anees_after)}});

@@ -26,6 +26,8 @@ struct RunAggregate {
   std::vector<double> scan_ms;                      ///< every scan's association time [ms]
   int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
   int reloc_false = 0;                              ///< runs with a false relocalisation
+  int fp_to_duplicate = 0, fp_to_original = 0;      ///< RunResult's, summed
+  int runs_over_5_fp = 0;                           ///< runs with more than 5 false pairs
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
   RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;

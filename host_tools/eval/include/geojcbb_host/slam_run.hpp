@@ -115,6 +115,10 @@ struct RunResult {
   int scans = 0;
   int observations = 0;                ///< scored observations (= TP + TN + FP + FN)
   int fp_clutter = 0;                  ///< of the FP, clutter (other robots, false detections) paired
+  /// Of the FP of a true landmark's observation paired with another true landmark's map landmark:
+  /// that map landmark is a duplicate (made after the first one of its identity, e.g. during a
+  /// drift), or the first (the original) of its identity.
+  int fp_to_duplicate = 0, fp_to_original = 0;
   int landmarks = 0;                   ///< mapped at the end
   int spurious_landmarks = 0;          ///< augmented from clutter (over the run)
   int spurious_in_map = 0;             ///< made from clutter and still mapped at the end
@@ -170,6 +174,7 @@ class RunScorer {
   int cls(int t) const { return landmark_group_.empty() ? t : landmark_group_[static_cast<std::size_t>(t)]; }
   std::vector<int> feature_truth_;   ///< landmark id -> true landmark it came from (-1 clutter)
   std::vector<int> mapped_;          ///< true landmark -> map landmarks made from it, still mapped
+  std::vector<FeatureId> first_;     ///< true landmark -> the first map landmark made from it (-1: none)
   std::vector<int> landmark_group_;  ///< true landmark -> its group
   RunResult res_;
 };
