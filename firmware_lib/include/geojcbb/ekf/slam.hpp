@@ -1,27 +1,29 @@
-// ekf: fixed-capacity EKF-SLAM with a dense covariance.
-//   state  x = [x_r, y_r, theta_r, l1x, l1y, l2x, l2y, ...]   (Layout: named blocks)
+// ekf: fixed-capacity EKF-SLAM, the filter: the state x, and the steps that move and correct it.
+//   state  x = [x_r, y_r, theta_r, l1x, l1y, l2x, l2y, ...]   (Layout: named blocks), n = dim()
+//   its covariance P in ekf/packed_covariance.hpp, each landmark's record in ekf/landmark_book.hpp
 //   predict:        x_r <- f(x_r, u),  P_rr <- F P_rr F^T + G Q G^T,  P_rl <- F P_rl          O(n)
 //   predict_local:  candidates within r + d (eq. 5), their h_j and C = H P H^T (all cross terms) O(n^2)
 //   update:         the associated pairs fused sequentially, kUpdateBlockPairs pairs (rows of H
 //                   touching the pose and one landmark each) at a time, linearised once: per block
 //                   A = P H_b^T (O(n)), S_b = H_b A + R_b = L L^T, V = A L^-T, x <- x + V L^-1 nu_b,
-//                   P <- P - V V^T on the packed triangle; equal to one batch update (design.md,
+//                   P <- P - V V^T (PackedCovariance::downdate); equal to one batch update (design.md,
 //                   "Covariance engine"); scratch O(n)                                      O(n^2 p)
 //   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
-//   review:         landmark bookkeeping: a new landmark is tentative until it is paired again;
-//                   one that is expected in view and missed too often is removed              O(n^2)
+//   review:         landmark bookkeeping (the book's rules, LandmarkPolicy, and the static gate
+//                   on x and P): a new landmark is tentative until it is paired again; one that
+//                   is expected in view and missed too often is removed, x and P compacted   O(n^2)
 // First-estimates Jacobians (Huang, Mourikis, Roumeliotis, ICRA 2008; FilterOptions): the
 // measurement Jacobians use each landmark's first estimate, and the first prediction after an
 // update uses the pose before that update, so the filter gains no information along the directions
 // that SLAM cannot observe (global position and heading); the innovations still use the current
 // estimate. Without them the heading's variance shrinks while its error grows (docs/mrclam.md).
-// Landmark ids are stable: augment hands out increasing ids and removal keeps the order, so the id
-// of index j only ever grows with j, and index_of() is a binary search. Predictions, associations
-// and update() speak ids; indices are internal.
-// No heap: P is stored packed, its upper triangle column by column (entry (r, c), r <= c, at
-// c (c + 1) / 2 + r), in a fixed array of capacity K (K + 1) / 2 for K = 3 + 2 MaxLandmarks; only
-// cov() reads it from outside. Adding a landmark appends two columns and moves nothing. Every call
-// validates first and changes no state unless it returns kOk.
+// Landmark ids are stable (the book hands them out in increasing order and keeps the order), so
+// index_of() is a binary search. Predictions, associations and update() speak ids; indices are
+// internal, the same in x, P and the book. Bounds: n <= kMaxState = 3 + 2 MaxLandmarks; every loop
+// is over the state, the landmarks, the candidates or the pairs of one scan.
+// No heap: x, P (packed, K (K + 1) / 2 scalars for K = kMaxState; only cov() reads it from outside)
+// and the book are fixed arrays in the object. Every call validates first and changes no state
+// unless it returns kOk.
 #pragma once
 
 #include <array>
@@ -29,8 +31,10 @@
 #include <cstdint>
 
 #include "geojcbb/core/association_types.hpp"
-#include "geojcbb/ekf/motion.hpp"
 #include "geojcbb/core/range_bearing.hpp"
+#include "geojcbb/ekf/landmark_book.hpp"
+#include "geojcbb/ekf/motion.hpp"
+#include "geojcbb/ekf/packed_covariance.hpp"
 
 namespace geojcbb::ekf {
 
@@ -46,10 +50,6 @@ struct Layout {
 /// products; one pair would halve the scratch and cost more instructions per covariance entry.
 constexpr int kUpdateBlockPairs = 2;
 constexpr int kUpdateBlockCols = 2 * kUpdateBlockPairs;
-/// Columns of P the downdate updates per pass (Slam::downdate): with 4 columns of V that is 24 + 4
-/// single-precision registers of the M4F's 32 for V's entries, so nothing spills; the arithmetic
-/// per entry does not depend on it.
-constexpr int kDowndateCols = 6;
 
 /// Caller-owned scratch of predict_local() and update(); typically a static object on the device.
 /// O(n): the update's gain is one block of columns at a time (design.md, "Covariance engine").
@@ -86,39 +86,6 @@ struct Visibility {
   T occlusion_rad = T(0);
 };
 
-/// Tentative landmarks: a landmark is confirmed once it has been paired `confirm_hits` times (its
-/// first sighting counts). Until then it is removed when it has been expected in view and not
-/// paired `max_misses` times, or when `max_tentative_reviews` reviews have passed (it left the view
-/// unconfirmed). This keeps clutter that passed the augmentation gate out of the map.
-/// Objects that move (another robot) are removed even when confirmed, by two rules (0: off):
-///   miss_probability  expected in view and missed so often in a row that a static landmark seen at
-///                     this landmark's own rate, p = (hits + 1) / (expected + 2), would be missed
-///                     so with a probability below this: (1 - p)^streak < miss_probability;
-///   static_gate_d2    paired, but its estimate has moved further than refining a static point can:
-///                     (l - l0)^T (P0 - P + f I)^-1 (l - l0) > static_gate_d2, with l0 and P0 the
-///                     landmark's position and covariance when it was added, P its covariance now
-///                     (for a static point l - l0 has covariance P0 - P) and f = (1 cm)^2.
-struct LandmarkPolicy {
-  int confirm_hits = 2;
-  int max_misses = 2;
-  int max_tentative_reviews = 10;
-  float miss_probability = 0.0f;
-  float static_gate_d2 = 0.0f;
-  bool valid() const {
-    return confirm_hits >= 1 && confirm_hits <= 255 && max_misses >= 1 && max_misses <= 255 &&
-           max_tentative_reviews >= 1 && max_tentative_reviews <= 255 && miss_probability >= 0.0f &&
-           miss_probability < 1.0f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f;
-  }
-};
-
-struct ReviewStats {
-  int expected = 0;        ///< landmarks in the prediction that were in view
-  int paired = 0;          ///< of those, paired by the association
-  int removed = 0;         ///< landmarks removed (every rule)
-  int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
-  int removed_moved = 0;   ///< of those, removed by the static-gate rule
-};
-
 /// How the filter linearises.
 struct FilterOptions {
   /// First-estimates Jacobians (see the top of this file). Off: every Jacobian at the current
@@ -135,25 +102,25 @@ template <typename T, class B>
 class Slam {
  public:
   static constexpr int kMaxState = Layout::landmark(B::kMaxLandmarks);
+  using Covariance = PackedCovariance<T, kMaxState>;
   /// Scalars of the packed covariance: the upper triangle of a kMaxState x kMaxState matrix.
-  static constexpr std::size_t kPackedSize = static_cast<std::size_t>(kMaxState) * (kMaxState + 1) / 2;
+  static constexpr std::size_t kPackedSize = Covariance::kPackedSize;
   /// Variance floor of the update: no fusion may shrink a variance below this fraction of its
-  /// value before the block (one scan's information gain is orders of magnitude smaller here).
-  static constexpr T kMinVarianceRatio = T(1e-6);
+  /// value before the block (Covariance::kMinVarianceRatio).
+  static constexpr T kMinVarianceRatio = Covariance::kMinVarianceRatio;
 
   /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0, const FilterOptions& options = {}) {
     const Status s = check_pose_prior(x0, P0);
     if (s != Status::kOk) return s;
-    n_ = 0;
-    next_id_ = 0;
+    book_.clear();
     options_ = options;
     updated_ = false;
     x_[0] = x0.x;
     x_[1] = x0.y;
     x_[2] = wrap_angle(x0.theta);
-    set_sym<3>(0, symmetric_part(P0));
+    P_.template set_sym<3>(0, symmetric_part(P0));
     return Status::kOk;
   }
 
@@ -168,46 +135,34 @@ class Slam {
     x_[1] = x.y;
     x_[2] = wrap_angle(x.theta);
     updated_ = false;
-    set_sym<3>(0, symmetric_part(Pxx));
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
-      set_block<3, 2>(0, Layout::landmark(j), Mat32<T>::Zero());
+    P_.template set_sym<3>(0, symmetric_part(Pxx));
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
+      P_.template set_block<3, 2>(0, Layout::landmark(j), Mat32<T>::Zero());
     }
     return Status::kOk;
   }
 
-  int landmarks() const { return n_; }
+  int landmarks() const { return book_.size(); }
   /// The stable id of landmark index j (0 <= j < landmarks()).
-  FeatureId id(int j) const { return id_[j]; }
+  FeatureId id(int j) const { return book_[j].id; }
   /// Hits so far of landmark index j (saturating at 65535).
-  int hits(int j) const { return hits_[j]; }
+  int hits(int j) const { return book_[j].hits; }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
-  int index_of(FeatureId id) const {
-    int lo = 0, hi = n_;  // binary search: ids increase with the index; <= log2(kMaxLandmarks) + 1 steps
-    while (lo < hi) {
-      const int mid = lo + (hi - lo) / 2;
-      if (id_[mid] < id)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    return lo < n_ && id_[lo] == id ? lo : -1;
-  }
-  int dim() const { return Layout::landmark(n_); }
+  int index_of(FeatureId id) const { return book_.index_of(id); }
+  int dim() const { return Layout::landmark(landmarks()); }
   Pose2<T> pose() const { return {x_[0], x_[1], x_[2]}; }
   Vec2<T> landmark(int j) const { return Vec2<T>(x_[Layout::landmark(j)], x_[Layout::landmark(j) + 1]); }
   /// Where the measurement Jacobians of landmark j are evaluated: its first estimate with
   /// first-estimates Jacobians, else its current estimate.
   Vec2<T> linearisation_point(int j) const {
-    return options_.first_estimates_jacobians ? Vec2<T>(first_[2 * j], first_[2 * j + 1]) : landmark(j);
+    return options_.first_estimates_jacobians ? Vec2<T>(book_[j].l0[0], book_[j].l0[1]) : landmark(j);
   }
   const FilterOptions& options() const { return options_; }
   T x(int i) const { return x_[i]; }
   /// Entry (r, c) of the covariance (symmetric: cov(r, c) == cov(c, r), one stored scalar).
-  T cov(int r, int c) const { return p_[packed_index(r, c)]; }
+  T cov(int r, int c) const { return P_.cov(r, c); }
   /// Where entry (r, c) lives in the packed upper triangle (column by column).
-  static constexpr std::size_t packed_index(int r, int c) {
-    return r <= c ? static_cast<std::size_t>(c) * (c + 1) / 2 + r : static_cast<std::size_t>(r) * (r + 1) / 2 + c;
-  }
+  static constexpr std::size_t packed_index(int r, int c) { return Covariance::packed_index(r, c); }
 
   /// Moves the robot by one odometry interval.
   /// @return kOk; kNonFinite (also when the new pose or covariance would overflow); kInvalidInput
@@ -227,7 +182,7 @@ class Slam {
       F(1, 2) += x_[0] - prior_[0];
     }
     const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
-    const Mat3<T> Prr = F * block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
+    const Mat3<T> Prr = F * P_.template block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
     // Finite inputs can still overflow (speeds or sigmas near the scalar's max): check the new
     // pose and covariance before writing any of them.
     if (!std::isfinite(next.x) || !std::isfinite(next.y) || !std::isfinite(next.theta) || !Prr.allFinite()) {
@@ -238,13 +193,13 @@ class Slam {
     // 1): refused, nothing changed (fuzz_associate's finding).
     const Mat3<T> Prr_sym = symmetric_part(Prr);
     if (!is_spd_scaled<T>(Prr_sym)) return Status::kNotPositiveDefinite;
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
-      if (!(F * block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
+      if (!(F * P_.template block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
     }
-    set_sym<3>(0, Prr_sym);
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks: only the pose rows change, O(n)
+    P_.template set_sym<3>(0, Prr_sym);
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks: only the pose rows change, O(n)
       const int l = Layout::landmark(j);
-      set_block<3, 2>(0, l, F * block<3, 2>(0, l));
+      P_.template set_block<3, 2>(0, l, F * P_.template block<3, 2>(0, l));
     }
     x_[0] = next.x;
     x_[1] = next.y;
@@ -267,7 +222,7 @@ class Slam {
     int n = 0;
     stats = LocalMapStats{};
     const Pose2<T> xr = pose();
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks; insertion keeps the nearest kMaxCandidates
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks; insertion keeps the nearest kMaxCandidates
       const T r = (landmark(j) - Vec2<T>(xr.x, xr.y)).norm();
       if (!(r < radius_m) || !(r > T(0))) continue;
       ++stats.in_region;
@@ -290,18 +245,18 @@ class Slam {
     if (sized != Status::kOk) return sized;
     out.count = n;
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-      out.id[a] = id_[idx[a]];
+      out.id[a] = id(idx[a]);
       out.h[a] = observe(xr, landmark(idx[a]));
       observe(xr, linearisation_point(idx[a]), &Hp[a], &Hl[a]);
     }
-    const Mat3<T> Prr = block<3, 3>(0, 0);
+    const Mat3<T> Prr = P_.template block<3, 3>(0, 0);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
       const int la = Layout::landmark(idx[a]);
       // Row a of H P: the 2 x 3 pose part and, per b, the 2 x 2 landmark part.
-      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * block<3, 2>(0, la).transpose();  // P_lr = P_rl^T, stored once
-      for (int b = 0; b <= a; ++b) {                                              // <= kMaxCandidates
+      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * P_.template block<3, 2>(0, la).transpose();  // P_lr = P_rl^T
+      for (int b = 0; b <= a; ++b) {                                                          // <= kMaxCandidates
         const int lb = Layout::landmark(idx[b]);
-        const Mat2<T> HPl = Hp[a] * block<3, 2>(0, lb) + Hl[a] * block<2, 2>(la, lb);
+        const Mat2<T> HPl = Hp[a] * P_.template block<3, 2>(0, lb) + Hl[a] * P_.template block<2, 2>(la, lb);
         Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
         if (a == b) Cab = symmetric_part(Cab);
         out.C.set_block(a, b, Cab);  // block (b, a) = Cab^T: C is stored as its lower block triangle
@@ -420,7 +375,7 @@ class Slam {
       // S positive definite is not enough in floating point: a pose variance many orders above the
       // landmark's (float, 1e6 against 1e-2) loses every digit in P - V V^T, and the result can be
       // indefinite (fuzz_node's finding). The entries that define the filter's guarantees, the pose
-      // block and each landmark's 2x2 block, are computed as downdate() will write them and checked
+      // block and each landmark's 2x2 block, are computed as the downdate will write them and checked
       // first.  O(n K)
       if (spd) spd = downdate_keeps_blocks_definite(n, ws);
       for (int i = 0; i < k && spd; ++i) {  // w <- L^-1 nu_b;  <= K
@@ -453,7 +408,7 @@ class Slam {
         x_[r] += dx;
       }
       x_[2] = wrap_angle(x_[2]);
-      downdate(n, ws);
+      P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
     }
     return Status::kOk;
   }
@@ -469,38 +424,22 @@ class Slam {
     if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
     if (z.x() < T(0)) return Status::kInvalidInput;
     if (!is_spd(R)) return Status::kNotPositiveDefinite;
-    if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
+    if (book_.full()) return Status::kCapacityExceeded;
     Mat23<T> Jp;
     Mat2<T> Jz;
     const Vec2<T> l = inverse_observe(pose(), z, &Jp, &Jz);
-    const int n = dim();
-    const int k = n;  // first row of the new landmark
+    const int n = dim();  // first row of the new landmark
     // A finite z can still overflow (a range near the scalar's max): check the new mean and
     // covariance before writing any of them.
-    const Mat2<T> Pll = Jp * block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
+    const Mat2<T> Pll = Jp * P_.template block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
     // R at rounding's edge, or a block so elongated that it is singular in T (double, R near 1e123:
     // the raw determinant rounds positive; fuzz_associate's finding): tested scale-free.
     const Mat2<T> Pll_sym = symmetric_part(Pll);
     if (!spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
-    for (int c = 0; c < n; ++c) {  // <= kMaxState
-      for (int u = 0; u < 2; ++u) {
-        T s = T(0);
-        for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
-        if (!std::isfinite(s)) return Status::kNonFinite;
-      }
-    }
-    for (int c = 0; c < n; ++c) {  // <= kMaxState: P_lx = Jp P_rx, the new columns k, k + 1
-      for (int u = 0; u < 2; ++u) {
-        T s = T(0);
-        for (int t = 0; t < 3; ++t) s += Jp(u, t) * P(t, c);
-        P(c, k + u) = s;
-      }
-    }
-    set_sym<2>(k, Pll_sym);
-    add_bookkeeping(l);
-    id = next_id_++;
-    ++n_;
+    if (!P_.correlated_finite(n, Jp)) return Status::kNonFinite;
+    P_.append_correlated(n, Jp, Pll_sym);  // P_lx = Jp P_rx, the new columns n, n + 1
+    id = add_landmark(l);
     return Status::kOk;
   }
 
@@ -513,15 +452,9 @@ class Slam {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
     const Mat2<T> Pll_sym = symmetric_part(Pll);
     if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;  // as augment()
-    if (n_ >= B::kMaxLandmarks || next_id_ == kMaxId) return Status::kCapacityExceeded;
-    const int k = dim();
-    for (int c = 0; c < k; ++c) {  // <= kMaxState
-      for (int u = 0; u < 2; ++u) P(c, k + u) = T(0);
-    }
-    set_sym<2>(k, Pll_sym);
-    add_bookkeeping(l);
-    id = next_id_++;
-    ++n_;
+    if (book_.full()) return Status::kCapacityExceeded;
+    P_.append_uncorrelated(dim(), Pll_sym);
+    id = add_landmark(l);
     return Status::kOk;
   }
 
@@ -543,8 +476,8 @@ class Slam {
       return Status::kInvalidInput;
     }
     stats = ReviewStats{};
-    for (int j = 0; j < n_; ++j) drop_[j] = 0;  // <= kMaxLandmarks
-    for (int a = 0; a < pred.count; ++a) {      // <= kMaxCandidates
+    book_.start_review();
+    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       const int j = index_of(pred.id[a]);
       if (j < 0) continue;  // not in this map
       bool paired = false;
@@ -556,110 +489,50 @@ class Slam {
             !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
       }
       stats.expected += in_view;
-      if ((in_view || paired) && expected_[j] < 65535) ++expected_[j];
-      if (paired) {
-        ++stats.paired;
-        if (hits_[j] < 65535) ++hits_[j];
-        miss_p_[j] = T(1);
-        if (policy.static_gate_d2 > 0.0f) {
-          // A static landmark's estimate only refines its first one: l - l0 has covariance
-          // P0 - P (the information gained), floored by kStaticFloor_m2 against a near-singular gain.
-          const int l = Layout::landmark(j);
-          const T a0 = init_cov_[3 * j] - P(l, l) + kStaticFloor_m2, b0 = init_cov_[3 * j + 1] - P(l, l + 1),
-                  c0 = init_cov_[3 * j + 2] - P(l + 1, l + 1) + kStaticFloor_m2;
-          const T det = a0 * c0 - b0 * b0;
-          const T dx = x_[Layout::landmark(j)] - first_[2 * j], dy = x_[Layout::landmark(j) + 1] - first_[2 * j + 1];
-          const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
-          if (det > T(0) && d2 > T(policy.static_gate_d2)) drop_[j] = 2;
-        }
-      } else if (in_view) {
-        if (misses_[j] < 255) ++misses_[j];
-        if (policy.miss_probability > 0.0f) {
-          const T p = (T(hits_[j]) + T(1)) / (T(expected_[j]) + T(2));
-          miss_p_[j] *= T(1) - p;
-          if (hits_[j] >= policy.confirm_hits && miss_p_[j] < T(policy.miss_probability)) drop_[j] = 1;
-        }
-      }
+      stats.paired += paired;
+      book_.count(j, in_view, paired, policy);
+      if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
     }
-    // Compaction in index order: every source index >= its destination, so nothing is overwritten
-    // before it is read.
     std::int16_t keep[B::kMaxLandmarks];
-    int kept = 0;
-    for (int j = 0; j < n_; ++j) {  // <= kMaxLandmarks
-      if (drop_[j] != 0) {
-        stats.removed_missed += drop_[j] == 1;
-        stats.removed_moved += drop_[j] == 2;
-        continue;
-      }
-      if (hits_[j] < policy.confirm_hits) {
-        if (age_[j] < 255) ++age_[j];
-        if (misses_[j] >= policy.max_misses || age_[j] >= policy.max_tentative_reviews) continue;
-      }
-      keep[kept++] = static_cast<std::int16_t>(j);
-    }
-    stats.removed = n_ - kept;
-    if (kept == n_) return Status::kOk;
+    const int kept = book_.choose_kept(policy, keep, stats);
+    if (kept == landmarks()) return Status::kOk;
     move_kept(keep, kept);
-    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
-      id_[k] = id_[keep[k]];
-      first_[2 * k] = first_[2 * keep[k]];
-      first_[2 * k + 1] = first_[2 * keep[k] + 1];
-      hits_[k] = hits_[keep[k]];
-      misses_[k] = misses_[keep[k]];
-      age_[k] = age_[keep[k]];
-      expected_[k] = expected_[keep[k]];
-      miss_p_[k] = miss_p_[keep[k]];
-      for (int u = 0; u < 3; ++u) init_cov_[3 * k + u] = init_cov_[3 * keep[k] + u];
-    }
-    n_ = kept;
+    book_.retain(keep, kept);
     return Status::kOk;
   }
 
  private:
-  /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Out of
-  /// line so review()'s frame (which holds keep) stays within the 512-byte budget.
+  /// The static gate (LandmarkPolicy::static_gate_d2) on landmark j: a static landmark's estimate
+  /// only refines its first one, so l - l0 has covariance P0 - P (the information gained), floored
+  /// by kStaticFloor_m2 against a near-singular gain. Whether its d2 exceeds gate_d2.
+  bool moved(int j, T gate_d2) const {
+    const LandmarkRecord<T>& r = book_[j];
+    const int l = Layout::landmark(j);
+    const T a0 = r.P0[0] - cov(l, l) + kStaticFloor_m2, b0 = r.P0[1] - cov(l, l + 1),
+            c0 = r.P0[2] - cov(l + 1, l + 1) + kStaticFloor_m2;
+    const T det = a0 * c0 - b0 * b0;
+    const T dx = x_[l] - r.l0[0], dy = x_[l + 1] - r.l0[1];
+    const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
+    return det > T(0) && d2 > gate_d2;
+  }
+  /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Every
+  /// source index is at or after its destination, so nothing is overwritten before it is read.
+  /// Out of line so review()'s frame (which holds keep) stays within the 512-byte budget.
   [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
-    auto old_row = [&](int r) {
-      return r < Layout::kPoseSize ? r
-                                   : Layout::landmark(keep[(r - Layout::kPoseSize) / 2]) + (r - Layout::kPoseSize) % 2;
-    };
-    const int n = Layout::landmark(kept);
-    // The landmarks before the first removed one keep their index, so the leading rows and columns
-    // of P (and of x) stay where they are: only the columns from there on move.
-    int first = 0;
-    while (first < kept && keep[first] == first) ++first;  // <= kMaxLandmarks
-    const int r_first = Layout::landmark(first);
-    // Packed: old_row is increasing, so the source of (r, c), r <= c, lies at or after it in the
-    // column-by-column order; copying in that order reads every source before it is overwritten.
-    for (int c = r_first; c < n; ++c) {  // <= kMaxState
-      const int ocol = old_row(c);
-      T* dst = &p_[packed_index(0, c)];
-      const T* src = &p_[packed_index(0, ocol)];
-      for (int r = 0; r < r_first; ++r) dst[r] = src[r];    // <= kMaxState: rows that keep their index
-      for (int k = first; Layout::landmark(k) <= c; ++k) {  // <= kMaxLandmarks: two rows per landmark
-        const int r = Layout::landmark(k), o = Layout::landmark(keep[k]);
-        dst[r] = src[o];
-        if (r + 1 <= c) dst[r + 1] = src[o + 1];
-      }
-      x_[c] = x_[ocol];
+    P_.template keep_pairs<Layout::kPoseSize>(keep, kept);
+    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
+      const int l = Layout::landmark(k), o = Layout::landmark(keep[k]);
+      x_[l] = x_[o];
+      x_[l + 1] = x_[o + 1];
     }
   }
-  /// The state and bookkeeping of landmark index n_ at l, whose covariance rows are already set.
-  void add_bookkeeping(const Vec2<T>& l) {
+  /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
+  /// record. @return its id
+  FeatureId add_landmark(const Vec2<T>& l) {
     const int k = dim();
     x_[k] = l.x();
     x_[k + 1] = l.y();
-    first_[2 * n_] = l.x();
-    first_[2 * n_ + 1] = l.y();
-    id_[n_] = next_id_;
-    hits_[n_] = 1;
-    misses_[n_] = 0;
-    age_[n_] = 0;
-    expected_[n_] = 1;
-    miss_p_[n_] = T(1);
-    init_cov_[3 * n_] = P(k, k);
-    init_cov_[3 * n_ + 1] = P(k, k + 1);
-    init_cov_[3 * n_ + 2] = P(k + 1, k + 1);
+    return book_.add(l, P_.template block<2, 2>(k, k));
   }
   /// A pose and its covariance fit to start from: finite, P symmetric positive definite.
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
@@ -675,145 +548,35 @@ class Slam {
     if (!is_spd_scaled<T>(symmetric_part(P0))) return Status::kNotPositiveDefinite;
     return Status::kOk;
   }
-  /// P <- P - V V^T over the packed upper triangle (the K columns of ws.V); a variance that
-  /// rounding would take below kMinVarianceRatio of its value before is floored there (raising a
-  /// diagonal entry adds a positive semidefinite matrix, so P stays positive definite).  O(n^2 K)
-  /// Every entry gets the same arithmetic whichever loop below computes it: starting from P(r, c),
-  /// K fused multiply-adds in the order t = 0 .. K-1, each correctly rounded,
-  ///   P(r, c) <- fma(V(r, t), -V(c, t), P(r, c))
-  /// (fmadd, std::fma: one VFMA.F32 on the M4F, fmaf on the host, so the two agree bit for bit; negating
-  /// V(c, t) first is exact). The column blocking only shares the loads: kDowndateCols columns per
-  /// pass, so each row of V is loaded once for them and each entry of P once per block.
-  void downdate(int n, SlamWorkspace<T, B>& ws) {
-    constexpr int K = kUpdateBlockCols;
-    constexpr int C = kDowndateCols;
-    const T* v = ws.V.data();
-    int c0 = 0;
-    for (; c0 + C <= n; c0 += C) {  // <= kMaxState / C column groups
-      T vc[C][K];                   // -V(c0 + j, t): in registers for the whole pass
-      T* pc[C];                     // column c0 + j of the packed triangle, row 0
-      for (int j = 0; j < C; ++j) {
-        pc[j] = &p_[static_cast<std::size_t>(c0 + j) * (c0 + j + 1) / 2];
-        for (int t = 0; t < K; ++t) vc[j][t] = -v[static_cast<std::size_t>(c0 + j) * K + t];
-      }
-      // Rows above the group: every column of the group, one load of V's row for all of them.
-      const T* vr = v;
-      const T* const vend = v + static_cast<std::size_t>(c0) * K;
-      while (vr != vend) {  // <= kMaxState rows
-        T a[K];
-        for (int t = 0; t < K; ++t) a[t] = vr[t];
-        vr += K;
-        for (int j = 0; j < C; ++j) {
-          T* q = pc[j];
-          T s = *q;
-          for (int t = 0; t < K; ++t) s = fmadd(a[t], vc[j][t], s);
-          *q = s;
-          pc[j] = q + 1;
-        }
-      }
-      // The group's own triangle: rows c0 .. c0 + j of column c0 + j (pc[j] points at row c0).
-      for (int j = 0; j < C; ++j) {
-        for (int i = 0; i < j; ++i) {
-          T s = pc[j][i];
-          for (int t = 0; t < K; ++t) s = fmadd(v[static_cast<std::size_t>(c0 + i) * K + t], vc[j][t], s);
-          pc[j][i] = s;
-        }
-        downdate_variance(pc[j][j], vc[j], ws);
-      }
-    }
-    for (int c = c0; c < n; ++c) {  // < C columns left
-      T vc[K];
-      for (int t = 0; t < K; ++t) vc[t] = -v[static_cast<std::size_t>(c) * K + t];
-      T* pc = &p_[static_cast<std::size_t>(c) * (c + 1) / 2];
-      for (int r = 0; r < c; ++r) {  // <= kMaxState rows above the diagonal
-        T s = pc[r];
-        for (int t = 0; t < K; ++t) s = fmadd(v[static_cast<std::size_t>(r) * K + t], vc[t], s);
-        pc[r] = s;
-      }
-      downdate_variance(pc[c], vc, ws);
-    }
-  }
   static bool spd_block(const Mat2<T>& m) { return is_spd_scaled<T>(m(0, 0), m(0, 1), m(1, 1)); }
-  /// Entry (r, c), r <= c, of P - V V^T as downdate() computes it: the same fused chain, and for
-  /// a variance the same floor (without counting it).
-  T downdated(int r, int c, const SlamWorkspace<T, B>& ws) const {
-    constexpr int K = kUpdateBlockCols;
-    const T* vr = &ws.V[static_cast<std::size_t>(r) * K];
-    const T* vc = &ws.V[static_cast<std::size_t>(c) * K];
-    T s = cov(r, c);
-    for (int t = 0; t < K; ++t) s = fmadd(vr[t], -vc[t], s);  // <= K
-    if (r == c && !(s >= cov(r, c) * kMinVarianceRatio)) s = cov(r, c) * kMinVarianceRatio;
-    return s;
-  }
-  /// Whether P - V V^T keeps the pose block and every landmark's 2x2 block positive definite beyond
-  /// rounding (is_spd_scaled). Reads only.  O(n K)
+  /// Whether P - V V^T (Covariance::downdated) keeps the pose block and every landmark's 2x2 block
+  /// positive definite beyond rounding (is_spd_scaled). Reads only.  O(n K)
   bool downdate_keeps_blocks_definite(int n, const SlamWorkspace<T, B>& ws) const {
+    constexpr int K = kUpdateBlockCols;
+    const T* v = ws.V.data();
     Mat3<T> Prr;
     for (int c = 0; c < 3; ++c) {
       for (int r = 0; r <= c; ++r) {
-        Prr(r, c) = downdated(r, c, ws);
+        Prr(r, c) = P_.template downdated<K>(r, c, v);
         Prr(c, r) = Prr(r, c);
       }
     }
     if (!is_spd_scaled<T>(Prr)) return false;
     for (int l = Layout::landmark(0); l + 1 < n; l += 2) {  // <= kMaxLandmarks
-      if (!is_spd_scaled<T>(downdated(l, l, ws), downdated(l, l + 1, ws), downdated(l + 1, l + 1, ws))) return false;
+      if (!is_spd_scaled<T>(P_.template downdated<K>(l, l, v), P_.template downdated<K>(l, l + 1, v),
+                            P_.template downdated<K>(l + 1, l + 1, v)))
+        return false;
     }
     return true;
   }
-  /// a * b + c rounded once: std::fma, which GCC lowers to VFMA.F32 on the M4F (checked in the
-  /// cross build's disassembly: no libcall) and the host's fmaf; both correctly rounded.
-  static T fmadd(T a, T b, T c) { return std::fma(a, b, c); }
-  /// The diagonal entry of a column whose -V row is nvc: the same fused chain, then the floor.
-  static void downdate_variance(T& pcc, const T (&nvc)[kUpdateBlockCols], SlamWorkspace<T, B>& ws) {
-    T nv = pcc;
-    for (int t = 0; t < kUpdateBlockCols; ++t) nv = fmadd(-nvc[t], nvc[t], nv);
-    const T floor = pcc * kMinVarianceRatio;
-    if (!(nv >= floor)) {
-      nv = floor;
-      ++ws.floored_variances;
-    }
-    pcc = nv;
-  }
-  T& P(int r, int c) { return p_[packed_index(r, c)]; }
-  T P(int r, int c) const { return cov(r, c); }
-  /// Writes a symmetric N x N diagonal block at (r0, r0): its upper triangle.
-  template <int N>
-  void set_sym(int r0, const Eigen::Matrix<T, N, N>& b) {
-    for (int c = 0; c < N; ++c)
-      for (int r = 0; r <= c; ++r) P(r0 + r, r0 + c) = b(r, c);
-  }
-  template <int R, int C>
-  Eigen::Matrix<T, R, C> block(int r0, int c0) const {
-    Eigen::Matrix<T, R, C> b;
-    for (int r = 0; r < R; ++r)
-      for (int c = 0; c < C; ++c) b(r, c) = cov(r0 + r, c0 + c);
-    return b;
-  }
-  template <int R, int C>
-  void set_block(int r0, int c0, const Eigen::Matrix<T, R, C>& b) {
-    for (int r = 0; r < R; ++r)
-      for (int c = 0; c < C; ++c) P(r0 + r, c0 + c) = b(r, c);
-  }
 
-  static constexpr FeatureId kMaxId = 0x7fffffff;
   static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
-  std::array<T, 2 * B::kMaxLandmarks> first_{};  ///< each landmark's first estimate (FEJ)
-  T prior_[2] = {T(0), T(0)};                    ///< the position before the updates since the last predict (FEJ)
-  bool updated_ = false;                         ///< an update since the last predict
+  T prior_[2] = {T(0), T(0)};               ///< the position before the updates since the last predict (FEJ)
+  Covariance P_;                            ///< P, packed
+  LandmarkBook<T, B::kMaxLandmarks> book_;  ///< one record per landmark, in the index order of x and P
+  bool updated_ = false;                    ///< an update since the last predict
   FilterOptions options_;
-  std::array<FeatureId, B::kMaxLandmarks> id_{};
-  std::array<std::uint16_t, B::kMaxLandmarks> hits_{};
-  std::array<std::uint16_t, B::kMaxLandmarks> expected_{};  ///< reviews in view or paired
-  std::array<T, B::kMaxLandmarks> miss_p_{};                ///< miss-probability rule's product
-  std::array<T, 3 * B::kMaxLandmarks> init_cov_{};          ///< P_ll when added: xx, xy, yy
-  std::array<std::uint8_t, B::kMaxLandmarks> drop_{};       ///< review scratch: 1 missed, 2 moved
-  std::array<std::uint8_t, B::kMaxLandmarks> misses_{};
-  std::array<std::uint8_t, B::kMaxLandmarks> age_{};  ///< reviews since augment, while tentative
-  FeatureId next_id_ = 0;
-  std::array<T, kPackedSize> p_{};  ///< P, packed (packed_index)
-  int n_ = 0;
 };
 
 }  // namespace geojcbb::ekf

@@ -4,7 +4,7 @@
 //     predict_local(r + d) -> associate (strategy) -> update -> augment -> review
 // Augmentation rule: an observation left kNewFeature becomes a landmark only if its nearest d2
 // also exceeds a second gate (chi-square level `new_landmark_level`, 2 dof); between the gates it
-// is dropped. review() then keeps clutter out of the map (tentative landmarks, ekf/slam.hpp).
+// is dropped. review() then keeps clutter out of the map (tentative landmarks, ekf/landmark_book.hpp).
 // No heap: the object holds the filter and every workspace, sized by the Bounds; typically static
 // on the device. Every call validates first and changes no state unless it returns kOk.
 #pragma once
