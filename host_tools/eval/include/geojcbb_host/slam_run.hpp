@@ -113,8 +113,8 @@ struct RunResult {
   Score group_score;  ///< as score, but a pair is correct when its feature's
                       ///< landmark is in the same group
   int scans = 0;
-  int observations = 0;                ///< scored observations (= TP + TN + FP + FN)
-  int fp_clutter = 0;                  ///< of the FP, clutter (other robots, false detections) paired
+  int observations = 0;  ///< scored observations (= TP + TN + FP + FN)
+  int fp_clutter = 0;    ///< of the FP, clutter (other robots, false detections) paired
   /// Of the FP of a true landmark's observation paired with another true landmark's map landmark:
   /// that map landmark is a duplicate (made after the first one of its identity, e.g. during a
   /// drift), or the first (the original) of its identity.
