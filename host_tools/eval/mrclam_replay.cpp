@@ -294,7 +294,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         "F1 per robot (landmark / landmark group: landmarks within "
         "%.2f m form a group)\n  %-6s",
         kLandmarkGroupRadius_m, "robot");
-    for (const Method& s : o.strategies) std::printf(" %11s", s.name());
+    for (const Method& s : o.strategies) std::printf(" %11s", s.name().c_str());
     std::printf("   winner\n");
     std::vector<RunAggregate> agg(o.strategies.size());
     for (std::size_t r = 0; r < dd.logs.size(); ++r) {

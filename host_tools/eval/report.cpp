@@ -31,6 +31,8 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   fp_to_duplicate += r.fp_to_duplicate;
   fp_to_original += r.fp_to_original;
   runs_over_5_fp += r.score.fp > 5;
+  loop_commits += r.loop_commits;
+  loop_held_scans += r.loop_held_scans;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
   removed_true += r.removed_true_landmarks;
@@ -91,6 +93,8 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.fp_to_duplicate = fp_to_duplicate;
   row.fp_to_original = fp_to_original;
   row.runs_over_5_fp = runs_over_5_fp;
+  row.loop_commits = loop_commits;
+  row.loop_held_scans = loop_held_scans;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;
     row.reloc_anees_before = reloc_anees_before / reloc_runs;

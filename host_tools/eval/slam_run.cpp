@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
+#include <cctype>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -168,13 +169,24 @@ std::vector<Method> select_methods(const std::vector<std::string>& names, bool a
     for (int k = 0; k < (all_presets ? kStrategyCount : kPaperStrategyCount); ++k) {
       out.push_back({static_cast<Strategy>(k), false, false});
     }
+    if (all_presets) out.push_back({Strategy::kPcjcbb, false, true, true, true});  // kRobustPreset
   }
   for (const std::string& n : names) {
     Method m;
-    if (!parse_strategy(n.c_str(), m.strategy, m.verify)) {
-      throw std::invalid_argument("unknown strategy '" + n +
-                                  "' (ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, "
-                                  "each optionally with +V)");
+    // The suffix letters: V goes to parse_strategy, R and L are the step's pieces.
+    const std::size_t plus = n.find('+');
+    std::string base = n.substr(0, plus), verify;
+    bool ok = true;
+    for (std::size_t i = plus == std::string::npos ? n.size() : plus + 1; i < n.size(); ++i) {
+      const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(n[i])));
+      ok = ok && (c == 'V' || c == 'R' || c == 'L');
+      if (c == 'V') verify = "+V";
+      m.relocalise = m.relocalise || c == 'R';
+      m.loop_check = m.loop_check || c == 'L';
+    }
+    if (plus + 1 == n.size()) ok = false;  // a bare "+"
+    if (!ok || !parse_strategy((base + verify).c_str(), m.strategy, m.verify)) {
+      throw std::invalid_argument("unknown strategy '" + n + "' (" + kPresetsHelp + ")");
     }
     out.push_back(m);
   }
@@ -259,6 +271,10 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
       oracle_associate(s, scan);
     } else {
       check(s.step.associate_prepared(s.obs, s.out), "associate");
+      reloc::LoopStats<double> loop;
+      check(s.step.check_loop(s.obs, s.out, loop), "check_loop");
+      res.loop_commits += loop.verdict == reloc::LoopVerdict::kCommitted;
+      res.loop_held_scans += loop.verdict == reloc::LoopVerdict::kPending;
     }
   }
   const double assoc_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -30,6 +30,7 @@ struct Budget {
   std::vector<std::uint32_t> associate20;  ///< association of scans with at least 20 observations
   std::vector<std::uint32_t> budget_hit;   ///< association of scans that hit the JCBB node budget
   std::vector<std::uint32_t> relocalise;   ///< the relocaliser's alignment, of the scans that ran it
+  std::vector<std::uint32_t> loop;         ///< the loop-closure check, of the scans that ran it
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
 };
@@ -68,6 +69,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       b.update.push_back(st.instr_update);
       b.augment_review.push_back(st.instr_augment_review);
       if (st.instr_relocalise > 0) b.relocalise.push_back(st.instr_relocalise);
+      if (st.instr_loop > 0) b.loop.push_back(st.instr_loop);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -130,7 +132,7 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
       step.push_back(st.instr_step);
     }
     const std::uint32_t hits = link.stats().budget_hits - hits0;
-    std::printf("  %-8s %6d %12u %14u %14u %14u\n", method.name(), scans, hits, median(assoc), maximum(assoc),
+    std::printf("  %-8s %6d %12u %14u %14u %14u\n", method.name().c_str(), scans, hits, median(assoc), maximum(assoc),
                 maximum(step));
   }
 }
@@ -244,7 +246,7 @@ int run(int argc, char** argv) {
                   "step max", "scans>=20", "assoc20 med", "assoc20 max");
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
-        std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", strategies[k].name(), median(b.associate),
+        std::printf("  %-8s %13u %13u %13u %13u %9zu %13u %13u\n", strategies[k].name().c_str(), median(b.associate),
                     maximum(b.associate), median(b.step), maximum(b.step), b.associate20.size(), median(b.associate20),
                     maximum(b.associate20));
       }
@@ -252,14 +254,18 @@ int run(int argc, char** argv) {
         const Budget& b = budgets[k];
         if (!b.relocalise.empty()) {
           std::printf("  %-8s %zu lost scans aligned against the map: median %u, max %u instructions\n",
-                      strategies[k].name(), b.relocalise.size(), median(b.relocalise), maximum(b.relocalise));
+                      strategies[k].name().c_str(), b.relocalise.size(), median(b.relocalise), maximum(b.relocalise));
+        }
+        if (!b.loop.empty()) {
+          std::printf("  %-8s %zu scans had their loop closure checked: median %u, max %u instructions\n",
+                      strategies[k].name().c_str(), b.loop.size(), median(b.loop), maximum(b.loop));
         }
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
         if (!b.budget_hit.empty()) {
           std::printf("  %-8s %zu scans hit the JCBB node budget; their association: max %u instructions\n",
-                      strategies[k].name(), b.budget_hit.size(), maximum(b.budget_hit));
+                      strategies[k].name().c_str(), b.budget_hit.size(), maximum(b.budget_hit));
         }
       }
     }

@@ -87,6 +87,16 @@ inline Config sample<Config>() {
   c.reloc_base_pairs = 5;
   c.reloc_inflation = 9.0f;
   c.reloc_confirm_scans = 2;
+  c.loop_check = true;
+  c.loop_age = 50;
+  c.loop_min_inliers = 4;
+  c.loop_search_m = 12.0f;
+  c.loop_search_rad = 0.3f;
+  c.loop_margin_nats = 5.0f;
+  c.loop_confirm_scans = 3;
+  c.loop_inflation = 9.0f;
+  c.loop_detection_probability = 0.8f;
+  c.loop_unexplained_density = 0.01f;
   c.stats_period_scans = 0x1234;
   return c;
 }
@@ -211,6 +221,7 @@ inline Stats sample<Stats>() {
   s.instr_update = 90000;
   s.instr_augment_review = 15000;
   s.instr_relocalise = 250000;
+  s.instr_loop = 120000;
   s.instr_step = 360000;
   s.stack_high_water_bytes = 2048;
   return s;

@@ -77,6 +77,16 @@ class Options(TypedDict, total=False):
     reloc_base_pairs: int  # default 4
     reloc_inflation: float  # default 4
     reloc_confirm_scans: int  # default 1
+    loop_check: bool  # default 0
+    loop_age: int  # default 100
+    loop_min_inliers: int  # default 3
+    loop_search_m: float  # default 20
+    loop_search_rad: float  # default 0.5
+    loop_margin_nats: float  # default 3
+    loop_confirm_scans: int  # default 2
+    loop_inflation: float  # default 4
+    loop_detection_probability: float  # default 0.9
+    loop_unexplained_density: float  # default 0.003
 
 
 class AssociationResult(TypedDict):

@@ -7,46 +7,19 @@
 
 #include <cmath>
 #include <memory>
-#include <random>
 #include <vector>
 
 #include "geojcbb/node/node.hpp"
+#include "firmware_lib/reloc/reloc_scene.hpp"
 #include "support/alloc_counter.hpp"
 
 using namespace geojcbb;
 using geojcbb::test::allocations_during;
+using geojcbb::test::observe_from;
 
 namespace {
 
 using B = DefaultBounds;
-
-/// 60 landmarks at least 3 m apart in a 50 m square (a fixed seed).
-std::vector<Eigen::Vector2d> make_map() {
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-25, 25);
-  std::vector<Eigen::Vector2d> map;
-  while (map.size() < 60) {
-    const Eigen::Vector2d p(u(rng), u(rng));
-    bool ok = true;
-    for (const auto& q : map) ok = ok && (p - q).norm() >= 3;
-    if (ok) map.push_back(p);
-  }
-  return map;
-}
-
-/// The landmarks within 20 m ahead of `x` as observations (noise-free; R for 0.1 m and 1 degree).
-template <typename T>
-void observe_from(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x, Observations<T, B>& obs) {
-  obs.clear();
-  Mat2<T> R;
-  R << T(0.01), T(0), T(0), T(3e-4);
-  for (const auto& l : map) {
-    const double dx = l.x() - x.x, dy = l.y() - x.y;
-    const double r = std::hypot(dx, dy), b = wrap_angle(std::atan2(dy, dx) - x.theta);
-    if (r > 20 || std::abs(b) > 1.5 || obs.count >= B::kMaxObservations) continue;
-    REQUIRE(obs.push(Vec2<T>(T(r), T(b)), R) == Status::kOk);
-  }
-}
 
 template <typename T>
 struct Rig {
@@ -86,7 +59,7 @@ double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
 }  // namespace
 
 TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on the next", T, float, double) {
-  const auto map = make_map();
+  const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4};  // carried 14 m and 120 degrees
   auto rig = make_rig<T>(map, before);
   REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
@@ -112,7 +85,7 @@ TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on t
 }
 
 TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the robot back to lost", T, float, double) {
-  const auto map = make_map();
+  const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4}, elsewhere{-8, 6, -1.0};
   auto rig = make_rig<T>(map, before);
   REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
@@ -134,7 +107,7 @@ TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the ro
 }
 
 TEST_CASE_TEMPLATE("reloc step: a lost scan that cannot be aligned changes nothing", T, float, double) {
-  const auto map = make_map();
+  const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3};
   auto rig = make_rig<T>(map, before);
   REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov().cast<T>()) == Status::kOk);
@@ -162,7 +135,7 @@ TEST_CASE_TEMPLATE("reloc step: a lost scan that cannot be aligned changes nothi
 }
 
 TEST_CASE("reloc step: the relocaliser off, lost() and a large covariance change nothing") {
-  const auto map = make_map();
+  const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3};
   auto rig = make_rig<double>(map, before, false);
   REQUIRE(rig->step.relocalise(rig->step.slam().pose(), kidnap_cov()) == Status::kOk);

@@ -98,7 +98,27 @@
   X(REAL, reloc_inflation, 4, (GE, 1, 0), "", "--reloc-inflation", \
     "the aligned pose's covariance is the fit's times this (the scan is then used again in the update)") \
   X(INT, reloc_confirm_scans, 1, (CLOSED, 0, 16), "", "--reloc-confirm-scans", \
-    "scans after the relocalisation that must pair reloc_min_inliers landmarks before the robot is found")
+    "scans after the relocalisation that must pair reloc_min_inliers landmarks before the robot is found") \
+  X(BOOL, loop_check, 0, (ANY, 0, 0), "", "--loop-check", \
+    "score a closure with old landmarks against a pose-free alignment; commit only a unique, confirmed winner") \
+  X(INT, loop_age, 100, (CLOSED, 1, 255), "scans", "--loop-age", \
+    "a confirmed landmark is old (a closure's) when it has not been paired for this many scans") \
+  X(INT, loop_min_inliers, 3, (CLOSED, 3, 255), "", "--loop-min-inliers", \
+    "old landmarks the alignment's pose must explain (reloc_margin and reloc_base_pairs as the relocaliser's)") \
+  X(REAL, loop_search_m, 20, (GT, 0, 0), "m", "--loop-search", \
+    "the alignment looks at old landmarks within local_radius_m + this of the pose, and moves it at most this") \
+  X(REAL, loop_search_rad, 0.5, (LOPEN, 0, 3.1415927410125732), "rad", "--loop-search-heading", \
+    "the alignment turns the pose by at most this") \
+  X(REAL, loop_margin_nats, 3, (GE, 0, 0), "nats", "--loop-margin", \
+    "set log-likelihood by which the alignment's closure must beat the association's") \
+  X(INT, loop_confirm_scans, 2, (CLOSED, 1, 16), "", "--loop-confirm-scans", \
+    "scans in a row the alignment's closure must win, with the same correction, before it is committed") \
+  X(REAL, loop_inflation, 4, (GE, 1, 0), "", "--loop-inflation", \
+    "a committed closure grows the pose block by this times (the correction squared + the fit's covariance)") \
+  X(REAL, loop_detection_probability, 0.9, (OPEN, 0, 1), "", "--loop-pd", \
+    "set likelihood: the probability that an old landmark in view is observed") \
+  X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
+    "set likelihood: observations per m^2 that no old landmark explains (clutter, newer landmarks)")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

@@ -66,10 +66,11 @@ struct LandmarkRecord {
   std::uint16_t expected;  ///< reviews in view or paired (saturating)
   std::uint8_t misses;     ///< reviews in view and not paired (saturating at 255)
   std::uint8_t age;        ///< reviews since added, while tentative (saturating)
+  std::uint8_t unseen;     ///< reviews since it was last paired (saturating at 255): a loop closure's age
   Drop drop;               ///< review scratch: set by count() and the filter's static gate
 };
-// The device's RAM budget counts on it (GEOJCBB_SLAM_STORAGE_SIZE): one byte of padding, no more.
-static_assert(sizeof(LandmarkRecord<float>) == 36, "LandmarkRecord<float>: 35 bytes of members, 1 of padding");
+// The device's RAM budget counts on it (GEOJCBB_SLAM_STORAGE_SIZE): no padding.
+static_assert(sizeof(LandmarkRecord<float>) == 36, "LandmarkRecord<float>: 36 bytes of members, no padding");
 
 /// @tparam T             scalar of the records
 /// @tparam MaxLandmarks  capacity
@@ -119,13 +120,17 @@ class LandmarkBook {
     r.expected = 1;
     r.misses = 0;
     r.age = 0;
+    r.unseen = 0;
     ++n_;
     return next_id_++;
   }
 
-  /// Starts a review: no landmark marked for removal.  O(n)
+  /// Starts a review: no landmark marked for removal, every one a review older.  O(n)
   void start_review() {
-    for (int j = 0; j < n_; ++j) rec_[j].drop = Drop::kNone;  // <= MaxLandmarks
+    for (int j = 0; j < n_; ++j) {  // <= MaxLandmarks
+      rec_[j].drop = Drop::kNone;
+      if (rec_[j].unseen < 255) ++rec_[j].unseen;
+    }
   }
   /// One review's evidence on landmark j: paired by the association, or expected in view and not
   /// paired (a miss); with miss_probability set, a confirmed landmark missed too often in a row is
@@ -136,6 +141,7 @@ class LandmarkBook {
     if (paired) {
       if (r.hits < 65535) ++r.hits;
       r.miss_p = T(1);
+      r.unseen = 0;
     } else if (in_view) {
       if (r.misses < 255) ++r.misses;
       if (policy.miss_probability > 0.0f) {

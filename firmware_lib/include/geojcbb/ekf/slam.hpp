@@ -142,11 +142,46 @@ class Slam {
     return Status::kOk;
   }
 
+  /// Adds Q (3x3, symmetric positive semi-definite) to the pose block, keeping the pose's
+  /// correlation with the map: a loop closure's commit (reloc/loop.hpp) lets the closure move the
+  /// pose, and through the correlations the landmarks mapped during the drift.
+  /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite when Q + eps I is not, or the sum
+  ///         would not be. Nothing changes unless kOk.
+  [[nodiscard]] Status inflate_pose(const Mat3<T>& Q) {
+    if (!Q.allFinite()) return Status::kNonFinite;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < r; ++c)
+        if (!nearly_equal(Q(r, c), Q(c, r))) return Status::kNotSymmetric;
+    if (Q(0, 0) < T(0) || Q(1, 1) < T(0) || Q(2, 2) < T(0)) return Status::kNotPositiveDefinite;
+    const Mat3<T> Prr = pose_covariance() + symmetric_part(Q);
+    if (!Prr.allFinite()) return Status::kNonFinite;
+    if (!is_spd_scaled<T>(Prr)) return Status::kNotPositiveDefinite;
+    P_.template set_sym<3>(0, Prr);
+    return Status::kOk;
+  }
+
+  /// The pose block of the covariance.
+  Mat3<T> pose_covariance() const {
+    Mat3<T> Prr;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) Prr(r, c) = cov(r, c);
+    return Prr;
+  }
+  /// Writes the pose block back (undoes inflate_pose when the update that followed it failed).
+  /// @return kOk; kNotPositiveDefinite (nothing changes).
+  [[nodiscard]] Status replace_pose_covariance(const Mat3<T>& Prr) {
+    if (!Prr.allFinite() || !is_spd_scaled<T>(symmetric_part(Prr))) return Status::kNotPositiveDefinite;
+    P_.template set_sym<3>(0, symmetric_part(Prr));
+    return Status::kOk;
+  }
+
   int landmarks() const { return book_.size(); }
   /// The stable id of landmark index j (0 <= j < landmarks()).
   FeatureId id(int j) const { return book_[j].id; }
   /// Hits so far of landmark index j (saturating at 65535).
   int hits(int j) const { return book_[j].hits; }
+  /// Reviews since landmark index j was last paired (saturating at 255).
+  int unseen(int j) const { return book_[j].unseen; }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   int index_of(FeatureId id) const { return book_.index_of(id); }
   int dim() const { return Layout::landmark(landmarks()); }
@@ -272,12 +307,20 @@ class Slam {
   ///         landmark block that rounding left not positive definite, kNonFinite when the mean would
   ///         overflow. No state changes unless kOk. Blocks of pairs after the first that meet any of
   ///         these are skipped (SlamWorkspace::rejected_blocks).
-  [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws) {
+  ///
+  /// `at` (nullptr: the estimate): the pose the measurements are linearised at, an iterated EKF's
+  /// step from a better point than the estimate (a loop closure's fitted pose, reloc/loop.hpp): the
+  /// innovation becomes z - h(at) - H (x - at), the correction still applies to the estimate x.
+  [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws,
+                              const Pose2<T>* at = nullptr) {
     if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
       return Status::kInvalidInput;
     }
+    if (at != nullptr && !(std::isfinite(at->x) && std::isfinite(at->y) && std::isfinite(at->theta))) {
+      return Status::kNonFinite;
+    }
     int p = 0;
-    const Pose2<T> xr = pose();
+    const Pose2<T> xr = at != nullptr ? Pose2<T>{at->x, at->y, wrap_angle(at->theta)} : pose();
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const FeatureId f = assoc.feature[i];
       if (f < 0) continue;
@@ -299,7 +342,7 @@ class Slam {
     ws.floored_variances = 0;
     if (p == 0) return Status::kOk;
     const int n = dim();
-    const T pose0[3] = {x_[0], x_[1], x_[2]};
+    const T pose0[3] = {xr.x, xr.y, xr.theta};  // the linearisation pose
     constexpr int G = kUpdateBlockPairs;
     constexpr int K = kUpdateBlockCols;
     auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
@@ -475,24 +518,7 @@ class Slam {
     if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations) {
       return Status::kInvalidInput;
     }
-    stats = ReviewStats{};
-    book_.start_review();
-    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
-      const int j = index_of(pred.id[a]);
-      if (j < 0) continue;  // not in this map
-      bool paired = false;
-      for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
-      const Vec2<T>& h = pred.h[a];
-      bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
-      for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
-        in_view =
-            !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
-      }
-      stats.expected += in_view;
-      stats.paired += paired;
-      book_.count(j, in_view, paired, policy);
-      if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
-    }
+    count_evidence(pred, assoc, view, policy, stats);
     std::int16_t keep[B::kMaxLandmarks];
     const int kept = book_.choose_kept(policy, keep, stats);
     if (kept == landmarks()) return Status::kOk;
@@ -514,6 +540,30 @@ class Slam {
     const T dx = x_[l] - r.l0[0], dy = x_[l + 1] - r.l0[1];
     const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
     return det > T(0) && d2 > gate_d2;
+  }
+  /// review()'s first half: every landmark of pred gains a hit, a miss or nothing (out of view),
+  /// and the static gate marks the ones that moved. Out of line so review()'s frame (which holds
+  /// keep) stays within the 512-byte budget at the large bounds.
+  [[gnu::noinline]] void count_evidence(const Prediction<T, B>& pred, const Association<T, B>& assoc,
+                                        const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats) {
+    stats = ReviewStats{};
+    book_.start_review();
+    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+      const int j = index_of(pred.id[a]);
+      if (j < 0) continue;  // not in this map
+      bool paired = false;
+      for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
+      const Vec2<T>& h = pred.h[a];
+      bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+      for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
+        in_view =
+            !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
+      }
+      stats.expected += in_view;
+      stats.paired += paired;
+      book_.count(j, in_view, paired, policy);
+      if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
+    }
   }
   /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Every
   /// source index is at or after its destination, so nothing is overwritten before it is read.

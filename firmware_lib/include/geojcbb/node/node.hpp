@@ -264,6 +264,7 @@ class Node {
     s.instr_update = last_.counts.update;
     s.instr_augment_review = last_.counts.augment_review;
     s.instr_relocalise = last_.counts.relocalise;
+    s.instr_loop = last_.counts.loop;
     s.instr_step = last_.counts.total;
     s.stack_high_water_bytes = stack_high_water_;
     return s;

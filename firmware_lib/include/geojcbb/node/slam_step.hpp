@@ -17,6 +17,7 @@
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
 #include "geojcbb/reloc/align.hpp"
+#include "geojcbb/reloc/loop.hpp"
 
 namespace geojcbb::node {
 
@@ -53,6 +54,7 @@ struct RelocStats {
 struct StageCounts {
   std::uint32_t predict_local = 0, associate = 0, update = 0, augment_review = 0, total = 0;
   std::uint32_t relocalise = 0;  ///< the alignment of a lost scan (0 otherwise)
+  std::uint32_t loop = 0;        ///< the closure check (check_loop; 0 when it did not run)
 };
 
 template <typename T, class B>
@@ -65,6 +67,7 @@ struct StepResult {
   ekf::LocalMapStats local;
   ekf::ReviewStats review;
   RelocStats reloc;
+  reloc::LoopStats<T> loop;
   StageCounts counts;
 };
 
@@ -101,7 +104,24 @@ class SlamStep {
     align.max_range_m = s.max_range_m;
     align.half_fov_rad = s.half_fov_rad;
     if (!align.valid()) return Status::kInvalidInput;
+    reloc::LoopOptions<T> loop;
+    loop.age = s.loop_age;
+    loop.search_m = s.loop_search_m;
+    loop.search_rad = s.loop_search_rad;
+    loop.margin_nats = s.loop_margin_nats;
+    loop.confirm_scans = s.loop_confirm_scans;
+    loop.inflation = s.loop_inflation;
+    loop.model.p_detect = s.loop_detection_probability;
+    loop.model.unexplained_density = s.loop_unexplained_density;
+    reloc::AlignOptions<T> loop_align = align;
+    loop_align.min_inliers = s.loop_min_inliers;
+    if (!loop.valid() || !loop_align.valid()) return Status::kInvalidInput;
     cfg_ = cfg;
+    loop_ = s.loop_check;
+    loop_opt_ = loop;
+    loop_align_ = loop_align;
+    loop_state_ = reloc::LoopState<T>{};
+    closing_ = false;
     align_ = align;
     reloc_ = s.relocalise;
     reloc_lost_position_var_ = s.reloc_lost_position_var_m2;
@@ -169,13 +189,19 @@ class SlamStep {
     st = associate(obs, pred_, cfg_, ws_, assoc_);
     if (st != Status::kOk) return st;
     const std::uint32_t t2 = clock ? clock() : 0;
+    reloc::LoopStats<T> ls;
+    st = check_loop(obs, assoc_, ls);
+    if (st != Status::kOk) return st;
+    const std::uint32_t t_loop = clock ? clock() : 0;
     st = commit(obs, assoc_, out, clock);
     if (st != Status::kOk) return st;
+    out.loop = ls;
+    out.counts.loop = ls.verdict == reloc::LoopVerdict::kNone ? 0 : t_loop - t2;
     out.local = local;
     out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
-    out.counts.total += t2 - t0;
+    out.counts.total += t_loop - t0;
     confirm(out, assoc_.jointly_compatible, rs);
     out.reloc = rs;
     return Status::kOk;
@@ -204,10 +230,7 @@ class SlamStep {
     align_ws_.clear_map();
     for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
       if (slam_.hits(j) < policy_.confirm_hits) continue;
-      const int r = ekf::Layout::landmark(j);
-      Mat2<T> P;
-      P << slam_.cov(r, r), slam_.cov(r, r + 1), slam_.cov(r, r + 1), slam_.cov(r + 1, r + 1);
-      const Status st = align_ws_.push_landmark(slam_.landmark(j), P);
+      const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
       if (st != Status::kOk) return st;
     }
     Status st = reloc::align(obs, align_, align_ws_, align_out_);
@@ -258,6 +281,136 @@ class SlamStep {
     rs.state = state_;
   }
 
+  /// Between the association and commit(): with loop_check on and the robot tracking, a scan
+  /// whose local region holds old landmarks has its closure checked (reloc/loop.hpp): `assoc` is
+  /// left as it is (no old landmark in the region, agreement, or the association's closure within
+  /// the margin), has its disputed pairs held (kUnmatched) while the alignment's closure is
+  /// pending, or gets the alignment's pairs when that closure is committed (commit() then inflates
+  /// the pose block and updates at the closure's pose). loop_check off: nothing happens.
+  /// @return kOk; kInvalidInput when not configured or for a count mismatch; the statuses of
+  ///         reloc::align (then `assoc` unchanged).
+  [[nodiscard]] Status check_loop(const Observations<T, B>& obs, Association<T, B>& assoc, reloc::LoopStats<T>& ls) {
+    if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
+    ls = reloc::LoopStats<T>{};
+    closing_ = false;
+    if (!loop_ || state_ != Localisation::kTracking) return Status::kOk;
+    auto old = [&](int j) { return slam_.unseen(j) >= loop_opt_.age && slam_.hits(j) >= policy_.confirm_hits; };
+    int in_region = 0;
+    for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+      const int j = slam_.index_of(pred_.id[a]);
+      in_region += j >= 0 && old(j);
+    }
+    if (in_region == 0) {  // away from old ground: the next visit is checked afresh
+      loop_state_ = reloc::LoopState<T>{};
+      return Status::kOk;
+    }
+    if (loop_state_.pending == 0 && loop_state_.agreed >= loop_opt_.settle_scans) return Status::kOk;
+    const Pose2<T> xp = slam_.pose();
+    const T reach = cfg_.local_radius_m + loop_opt_.search_m;
+    align_ws_.clear_map();
+    for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
+      if (!old(j) || (slam_.landmark(j) - Vec2<T>(xp.x, xp.y)).squaredNorm() > reach * reach) continue;
+      loop_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
+      const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
+      if (st != Status::kOk) return st;
+    }
+    Status st = reloc::align(obs, loop_align_, align_ws_, align_out_);
+    if (st != Status::kOk) return st;
+    const int m = obs.count;
+    ls.old_landmarks = align_ws_.n;
+    ls.inliers = align_out_.inliers;
+    ls.rival_inliers = align_out_.rival_inliers;
+    // The association's closure: its pairs with old landmarks, as sorted map indices.
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      align_ws_.pick[i] = -1;
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      if (j < 0 || !old(j)) continue;
+      for (int k = 0; k < align_ws_.n; ++k) {  // <= kMaxLandmarks
+        if (loop_slam_[static_cast<std::size_t>(align_ws_.index[k])] == j)
+          align_ws_.pick[i] = static_cast<std::int16_t>(k);
+      }
+    }
+    // Consistent with the pose as it is, without the pose's (perhaps overconfident) covariance.
+    const bool fits_as_is = reloc::max_pair_d2(align_ws_, m, xp) <= loop_align_.gate_d2;
+    Pose2<T> x_assoc = xp;
+    reloc::fit_picked(align_ws_, m, x_assoc);
+    ls.ll_association = reloc::set_log_likelihood(align_ws_, m, x_assoc, loop_align_, loop_opt_.model);
+    ls.association_pose = x_assoc;
+    const T jump2 = (align_out_.pose.x - xp.x) * (align_out_.pose.x - xp.x) +
+                    (align_out_.pose.y - xp.y) * (align_out_.pose.y - xp.y);
+    const bool alternative = align_out_.accepted && jump2 <= loop_opt_.search_m * loop_opt_.search_m &&
+                             std::abs(wrap_angle(align_out_.pose.theta - xp.theta)) <= loop_opt_.search_rad;
+    const Pose2<T> x_align = align_out_.pose;
+    if (alternative) {
+      reloc::align_detail::exclusive_inliers(align_ws_, m, x_align, loop_align_.gate_d2);  // its pairs in pick
+      ls.ll_alignment = reloc::set_log_likelihood(align_ws_, m, x_align, loop_align_, loop_opt_.model);
+      ls.alignment_pose = x_align;
+    } else {
+      for (int i = 0; i < m; ++i) align_ws_.pick[i] = -1;  // <= kMaxObservations
+    }
+    if (alternative && !reloc::align_detail::distinct(x_align, x_assoc, loop_align_)) {
+      ls.verdict = reloc::LoopVerdict::kAgreed;
+      loop_state_.pending = 0;
+      loop_state_.agreed = std::min(loop_state_.agreed + 1, loop_opt_.settle_scans);
+      return Status::kOk;
+    }
+    if (!alternative && fits_as_is) {
+      ls.verdict = reloc::LoopVerdict::kConsistent;
+      loop_state_.pending = 0;
+      return Status::kOk;
+    }
+    loop_state_.agreed = 0;
+    bool commit_now = false;
+    if (!alternative || !(ls.ll_alignment >= ls.ll_association + loop_opt_.margin_nats)) {
+      // No closure is unique and best: the association's is held too.
+      ls.verdict = alternative ? reloc::LoopVerdict::kKept : reloc::LoopVerdict::kNoAlternative;
+      loop_state_.pending = 0;
+    } else {
+      const bool same =
+          loop_state_.pending > 0 &&
+          !reloc::align_detail::distinct(reloc::corrected(loop_state_.correction, xp), x_align, loop_align_);
+      loop_state_.pending = same ? loop_state_.pending + 1 : 1;
+      loop_state_.correction = reloc::correction_between(xp, x_align);
+      commit_now = loop_state_.pending >= loop_opt_.confirm_scans;
+      ls.verdict = commit_now ? reloc::LoopVerdict::kCommitted : reloc::LoopVerdict::kPending;
+    }
+    // The disputed observations (paired with an old landmark by either closure): held, or paired
+    // as the committed closure says.
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      const bool disputed = align_ws_.pick[i] >= 0 || (j >= 0 && old(j));
+      if (!disputed) continue;
+      ++ls.held;
+      if (commit_now && align_ws_.pick[i] >= 0) {
+        const int k = loop_slam_[static_cast<std::size_t>(align_ws_.index[align_ws_.pick[i]])];
+        assoc.feature[i] = slam_.id(k);
+        assoc.d2[i] = align_ws_.pick_d2[i];
+        assoc.candidate[i] = -1;
+        for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+          if (pred_.id[a] == assoc.feature[i]) assoc.candidate[i] = static_cast<std::int16_t>(a);
+        }
+      } else {
+        assoc.feature[i] = kUnmatched;
+        assoc.candidate[i] = -1;
+      }
+    }
+    int pairings = 0;
+    for (int i = 0; i < m; ++i) pairings += assoc.feature[i] >= 0;  // <= kMaxObservations
+    assoc.pairings = pairings;
+    if (!commit_now) return Status::kOk;
+    const T dx = x_align.x - xp.x, dy = x_align.y - xp.y, dth = wrap_angle(x_align.theta - xp.theta);
+    Mat3<T> Q = align_out_.cov;
+    Q(0, 0) += dx * dx;
+    Q(1, 1) += dy * dy;
+    Q(2, 2) += dth * dth;
+    close_Q_ = loop_opt_.inflation * Q;
+    close_at_ = x_align;
+    closing_ = true;
+    loop_state_ = reloc::LoopState<T>{};
+    ls.verdict = reloc::LoopVerdict::kCommitted;
+    return Status::kOk;
+  }
+
   /// A scan that is not used (lost, not aligned): every observation kUnmatched, no counts.
   static void unused(const Observations<T, B>& obs, StepResult<T, B>& out) {
     out.count = obs.count;
@@ -293,8 +446,22 @@ class SlamStep {
                               CounterFn clock = nullptr) {
     if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
     const std::uint32_t t2 = clock ? clock() : 0;
-    Status st = slam_.update(obs, assoc, ekf_ws_);
-    if (st != Status::kOk) return st;
+    Status st = Status::kOk;
+    if (closing_) {  // a committed loop closure (check_loop): inflate, update at the closure's pose
+      closing_ = false;
+      const Mat3<T> before = slam_.pose_covariance();
+      st = slam_.inflate_pose(close_Q_);
+      if (st != Status::kOk) return st;
+      st = slam_.update(obs, assoc, ekf_ws_, &close_at_);
+      if (st != Status::kOk) {
+        // Undone: the pose block as it was (it was positive definite, the write cannot fail).
+        (void)slam_.replace_pose_covariance(before);
+        return st;
+      }
+    } else {
+      st = slam_.update(obs, assoc, ekf_ws_);
+      if (st != Status::kOk) return st;
+    }
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
     out.count = obs.count;
@@ -331,6 +498,13 @@ class SlamStep {
   }
 
  private:
+  Mat2<T> landmark_covariance(int j) const {
+    const int r = ekf::Layout::landmark(j);
+    Mat2<T> P;
+    P << slam_.cov(r, r), slam_.cov(r, r + 1), slam_.cov(r, r + 1), slam_.cov(r + 1, r + 1);
+    return P;
+  }
+
   ekf::Slam<T, B> slam_;
   ekf::SlamWorkspace<T, B> ekf_ws_;
   Prediction<T, B> pred_;
@@ -353,6 +527,15 @@ class SlamStep {
   bool skip_confirm_ = false;
   Localisation state_ = Localisation::kTracking;
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
+  // The closure check (StepSettings::loop_check): its options, memory, the old landmarks' filter
+  // indices in push order, and a committed closure for commit().
+  reloc::LoopOptions<T> loop_opt_;
+  reloc::AlignOptions<T> loop_align_;  ///< the relocaliser's, with loop_min_inliers
+  reloc::LoopState<T> loop_state_;
+  std::array<std::int16_t, B::kMaxLandmarks> loop_slam_{};
+  bool loop_ = false, closing_ = false;
+  Pose2<T> close_at_{};
+  Mat3<T> close_Q_ = Mat3<T>::Zero();
 };
 
 }  // namespace geojcbb::node

@@ -68,30 +68,44 @@ struct MapLandmark {
 };
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
-/// A preset with the verification switched in is named with "+V" (e.g. "JCBB+V").
+/// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
+/// the relocaliser, L the loop-closure check. kRobustPreset names the preset that has all of them.
 struct Method {
   Strategy strategy = Strategy::kGeojcbb;
   bool oracle = false;
-  bool verify = false;  ///< AssociationConfig::verify switched into the preset
-  const char* name() const {
-    static constexpr const char* kVerified[kStrategyCount] = {"ICNN+V",    "JCBB+V",    "KJCBB+V", "DFJCBB+V",
-                                                              "GEMJCBB+V", "GEOJCBB+V", "PCJCBB"};
-    static_assert(kStrategyCount == 7, "one +V name per strategy");
-    return oracle ? "TRUTH" : verify ? kVerified[static_cast<int>(strategy)] : to_string(strategy);
+  bool verify = false;      ///< AssociationConfig::verify switched into the preset
+  bool relocalise = false;  ///< StepSettings::relocalise switched in
+  bool loop_check = false;  ///< StepSettings::loop_check switched in
+  std::string name() const {
+    if (oracle) return "TRUTH";
+    std::string n = to_string(strategy);
+    std::string suffix;
+    if (verify && strategy != Strategy::kPcjcbb) suffix += 'V';  // PCJCBB verifies anyway
+    if (relocalise) suffix += 'R';
+    if (loop_check) suffix += 'L';
+    return suffix.empty() ? n : n + "+" + suffix;
   }
   void apply(RunOptions& o) const {
     o.step.strategy = strategy;
     o.oracle = oracle;
     o.step.verify = o.step.verify || verify;
+    o.step.relocalise = o.step.relocalise || relocalise;
+    o.step.loop_check = o.step.loop_check || loop_check;
   }
 };
+
+/// The preset with every piece of the lost-and-found work: PCJCBB (pose-free verification), the
+/// relocaliser and the loop-closure check (docs/relocalisation.md).
+constexpr const char* kRobustPreset = "PCJCBB+RL";
 
 /// The tools' one strategy-list parser (geojcbb_eval, geojcbb_link, geojcbb_qemu, the benchmarks):
 /// each name read by parse_strategy (case-insensitive; "+V" switches the verification in, e.g.
 /// "JCBB+V"), in the order given; no names: every preset (`all_presets`) or the papers' six. `oracle`
 /// appends the TRUTH row. Throws std::invalid_argument naming an unknown strategy.
 /// The presets as the tools' help texts name them.
-constexpr const char* kPresetsHelp = "ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, each optionally with +V";
+constexpr const char* kPresetsHelp =
+    "ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, each optionally with +V (verification), +R (relocaliser), "
+    "+L (loop-closure check) or a combination (+VRL); PCJCBB+RL has all";
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
 struct StepRecord {
@@ -128,6 +142,8 @@ struct RunResult {
   int dropped_observations = 0;        ///< over the observation capacity in a scan
   int budget_hits = 0;                 ///< scans whose JCBB node budget ran out
   int relocalisations = 0;             ///< poses the relocaliser accepted
+  int loop_commits = 0;                ///< loop closures the closure check committed (loop_check)
+  int loop_held_scans = 0;             ///< scans whose disputed pairs it held (a pending closure)
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,
          mean_abs_y_m = 0;        ///< over the scans with a true pose

@@ -206,6 +206,16 @@ struct Config : Codec<Config> {
   std::uint8_t reloc_base_pairs = 4;          ///< 1 .. 8
   float reloc_inflation = 4.0f;               ///< >= 1
   std::uint8_t reloc_confirm_scans = 1;       ///< 0 .. 16
+  bool loop_check = false;                    ///< loop closures scored against a pose-free alignment
+  std::uint8_t loop_age = 100;                ///< scans unpaired that make a landmark old, >= 1
+  std::uint8_t loop_min_inliers = 3;          ///< >= 3
+  float loop_search_m = 20.0f;                ///< > 0
+  float loop_search_rad = 0.5f;               ///< (0, pi]
+  float loop_margin_nats = 3.0f;              ///< >= 0
+  std::uint8_t loop_confirm_scans = 2;        ///< 1 .. 16
+  float loop_inflation = 4.0f;                ///< >= 1
+  float loop_detection_probability = 0.9f;    ///< (0, 1)
+  float loop_unexplained_density = 0.003f;    ///< > 0
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -260,6 +270,17 @@ struct Config : Codec<Config> {
         field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
         field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
         field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
+        field("loop_check", &Config::loop_check, range::one_of(0, 1), "", "loop closures checked before commit"),
+        field("loop_age", &Config::loop_age, range::at_least(1), "scans", "unpaired this long: an old landmark"),
+        field("loop_min_inliers", &Config::loop_min_inliers, range::at_least(3)),
+        field("loop_search_m", &Config::loop_search_m, range::above(0.0f), "m"),
+        field("loop_search_rad", &Config::loop_search_rad, range::interval(0.0f, kPiF, true, false), "rad"),
+        field("loop_margin_nats", &Config::loop_margin_nats, range::not_below(0.0f), "nats"),
+        field("loop_confirm_scans", &Config::loop_confirm_scans, range::between(1, 16)),
+        field("loop_inflation", &Config::loop_inflation, range::not_below(1.0f)),
+        field("loop_detection_probability", &Config::loop_detection_probability,
+              range::interval(0.0f, 1.0f, true, true)),
+        field("loop_unexplained_density", &Config::loop_unexplained_density, range::above(0.0f), "1/m^2"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -546,6 +567,7 @@ struct Stats : Codec<Stats> {
   std::uint32_t instr_update = 0;
   std::uint32_t instr_augment_review = 0;
   std::uint32_t instr_relocalise = 0;  ///< the relocaliser's alignment (a lost scan)
+  std::uint32_t instr_loop = 0;        ///< the loop-closure check (0 when it did not run)
   std::uint32_t instr_step = 0;        ///< the whole step
   std::uint32_t stack_high_water_bytes = 0;
 
@@ -569,6 +591,7 @@ struct Stats : Codec<Stats> {
         field("instr_update", &Stats::instr_update, range::any(), kInstr),
         field("instr_augment_review", &Stats::instr_augment_review, range::any(), kInstr),
         field("instr_relocalise", &Stats::instr_relocalise, range::any(), kInstr, "0 unless the robot was lost"),
+        field("instr_loop", &Stats::instr_loop, range::any(), kInstr, "0 unless the closure check ran"),
         field("instr_step", &Stats::instr_step, range::any(), kInstr, "the whole step"),
         field("stack_high_water_bytes", &Stats::stack_high_water_bytes, range::any(), "B",
               "0 where the board does not measure it"));
@@ -676,9 +699,9 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 96 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 124 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 72 && ObsBatch::kFixedSize == 5 &&
+                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
 

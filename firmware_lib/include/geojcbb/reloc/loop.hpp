@@ -1,0 +1,169 @@
+// reloc: loop closures scored, unique and confirmed before they are committed.
+// A closure is the scan's pairing with old landmarks (mapped long ago: ids at least `age` older
+// than the newest). Two hypotheses compete for them:
+//   the association's   its pairs with old landmarks, at the pose fitted to them (the predicted
+//                       pose when it has fewer than two)
+//   the alignment's     reloc::align over the old landmarks alone (pose-free, unique by a margin)
+// each scored at its own pose with the set likelihood (set_log_likelihood): paired terms
+// log p_D - d2/2 - log|2 pi S|/2, log(1 - p_D) for every old landmark in view and not paired, and
+// log(density) for every observation no old landmark explains. When the poses agree, or the
+// association's scores within `margin` nats of the alignment's, the association stands. Otherwise the
+// alignment's closure is pending: the disputed pairs are held (left unmatched, not augmented) and
+// the closure must win again, with the same correction (alignment pose against the filter's), on
+// `confirm_scans` scans in a row; then it is committed: the pose block inflated by the correction,
+// the alignment's pairs replace the association's, and the update linearised at the alignment's
+// pose (ekf::Slam::update's `at`, an iterated EKF step), so the correlations carry the correction to
+// the landmarks mapped during the drift. docs/relocalisation.md ("Loop closures").
+// Bounds: one align() call; two fits (kFitSteps Gauss-Newton steps) and two scores, each
+// O(m + n); the association's rewrite O(m n).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "geojcbb/core/association_types.hpp"
+#include "geojcbb/reloc/align.hpp"
+
+namespace geojcbb::reloc {
+
+/// Gauss-Newton steps of a hypothesis's pose fit.
+constexpr int kFitSteps = 2;
+
+/// The set likelihood's model of a scan.
+template <typename T>
+struct SetModel {
+  T p_detect = T(0.9);              ///< probability that an old landmark in view is observed, (0, 1)
+  T unexplained_density = T(3e-3);  ///< observations per m^2 no old landmark explains (clutter, newer landmarks)
+  bool valid() const {
+    return p_detect > T(0) && p_detect < T(1) && unexplained_density > T(0) && std::isfinite(unexplained_density);
+  }
+};
+
+/// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
+/// at pose x, over the map in ws and the observations align() prepared (ws.q, ws.S):
+///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
+///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
+/// Bound: m + n.
+template <typename T, class B>
+T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& view,
+                     const SetModel<T>& model) {
+  using namespace align_detail;
+  const Mat2<T> Rot = rotation(x.theta);
+  const T log_2pi = std::log(T(2) * kPi<T>);
+  T ll = T(0);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) {
+      ll += std::log(model.unexplained_density);
+      continue;
+    }
+    const int j = ws.pick[i];
+    const Vec2<T> e = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[j];
+    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[j];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0))) return -std::numeric_limits<T>::infinity();
+    const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
+    ll += std::log(model.p_detect) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det);
+  }
+  const int missed = view.max_range_m > T(0) ? misses(ws, m, x, view) : 0;
+  return ll + T(missed) * std::log(T(1) - model.p_detect);
+}
+
+/// The largest pose-free d2 of the pairs in ws.pick at pose x (S = R Sigma R^T + P_j: no pose
+/// uncertainty), 0 without pairs. Bound: m.
+template <typename T, class B>
+T max_pair_d2(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x) {
+  using namespace align_detail;
+  const Mat2<T> Rot = rotation(x.theta);
+  T worst = T(0);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    const int j = ws.pick[i];
+    const Vec2<T> e = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[j];
+    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[j];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0))) return std::numeric_limits<T>::infinity();
+    const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
+    worst = std::max(worst, d2);
+  }
+  return worst;
+}
+
+/// The pose that best explains the pairs in ws.pick (Procrustes, then kFitSteps Gauss-Newton
+/// steps); `x` unchanged with fewer than two pairs or a failed fit. Bound: (kFitSteps + 1) m.
+template <typename T, class B>
+void fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x) {
+  using namespace align_detail;
+  int pairs = 0;
+  for (int i = 0; i < m; ++i) pairs += ws.pick[i] >= 0;  // <= kMaxObservations
+  if (pairs < 2) return;
+  Pose2<T> y = procrustes(ws, m);
+  Mat3<T> cov;
+  for (int k = 0; k < kFitSteps; ++k) {  // <= kFitSteps
+    if (!gauss_newton_step(ws, m, y, cov)) return;
+  }
+  x = y;
+}
+
+/// The closure check's options (StepSettings loop_*).
+template <typename T>
+struct LoopOptions {
+  int age = 100;          ///< a confirmed landmark is old when not paired for this many scans (<= 255)
+  T search_m = T(20);     ///< old landmarks within the local radius + this; the alignment moves the pose at most this
+  T search_rad = T(0.5);  ///< ... and turns it at most this
+  T margin_nats = T(3);   ///< the alignment's closure must beat the association's by this
+  int confirm_scans = 2;  ///< consecutive wins, with the same correction, before the commit
+  T inflation = T(4);     ///< the pose block grows by this times the correction's square (and its fit)
+  int settle_scans = 5;   ///< agreeing checks after which the check rests until old landmarks leave the region
+  SetModel<T> model;
+  bool valid() const {
+    return age >= 1 && age <= 255 && search_m > T(0) && std::isfinite(search_m) && search_rad > T(0) &&
+           search_rad <= kPi<T> && margin_nats >= T(0) && std::isfinite(margin_nats) && confirm_scans >= 1 &&
+           confirm_scans <= 16 && inflation >= T(1) && std::isfinite(inflation) && settle_scans >= 1 && model.valid();
+  }
+};
+
+/// What the check did with one scan.
+enum class LoopVerdict : std::uint8_t {
+  kNone = 0,       ///< not checked (off, lost, no old landmark in the region, or resting)
+  kNoAlternative,  ///< checked: the alignment found no unique pose
+  kAgreed,         ///< the alignment's pose is the association's
+  kConsistent,     ///< no alternative, and the association's closure fits the pose as it is (pose-free d2)
+  kKept,           ///< they differ, and the association's closure scores within the margin
+  kPending,        ///< the alignment's closure wins, not yet confirmed: disputed pairs held
+  kCommitted,      ///< the alignment's closure won confirm_scans times: committed
+};
+
+template <typename T>
+struct LoopStats {
+  LoopVerdict verdict = LoopVerdict::kNone;
+  T ll_association = T(0), ll_alignment = T(0);   ///< set log-likelihoods [nats] (checked scans)
+  int old_landmarks = 0;                          ///< old landmarks within reach (checked scans)
+  int inliers = 0, rival_inliers = 0;             ///< the alignment's best pose's and its rival's
+  int held = 0;                                   ///< observations held (kPending) or re-paired (kCommitted)
+  Pose2<T> association_pose{}, alignment_pose{};  ///< where each closure was scored (checked scans)
+};
+
+/// The closure check's memory across scans (bounded: a few scalars).
+template <typename T>
+struct LoopState {
+  int pending = 0;        ///< consecutive wins of the alignment's closure
+  int agreed = 0;         ///< consecutive agreeing checks
+  Pose2<T> correction{};  ///< of the pending closure: alignment pose composed with the filter's inverse
+};
+
+/// world_T_b composed with the inverse of world_T_a: the transform that moves a onto b.
+template <typename T>
+Pose2<T> correction_between(const Pose2<T>& a, const Pose2<T>& b) {
+  const T dth = wrap_angle(b.theta - a.theta);
+  const T c = fmath::cos(dth), s = fmath::sin(dth);
+  return Pose2<T>{b.x - (c * a.x - s * a.y), b.y - (s * a.x + c * a.y), dth};
+}
+
+/// The correction applied to pose a.
+template <typename T>
+Pose2<T> corrected(const Pose2<T>& corr, const Pose2<T>& a) {
+  const T c = fmath::cos(corr.theta), s = fmath::sin(corr.theta);
+  return Pose2<T>{corr.x + c * a.x - s * a.y, corr.y + s * a.x + c * a.y, wrap_angle(a.theta + corr.theta)};
+}
+
+}  // namespace geojcbb::reloc

@@ -1,0 +1,238 @@
+// Loop closures scored, unique and confirmed (reloc/loop.hpp, node::SlamStep::check_loop): the set
+// likelihood on a hand-computed case; a drifted filter's closure held while pending, committed on
+// the confirming scan and then right; a correction that changes between scans not committed; an
+// agreeing closure left alone; the filter's linearisation point and pose inflation; bad input a
+// Status with nothing changed; no allocation; float and double agree.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "geojcbb/node/slam_step.hpp"
+#include "firmware_lib/reloc/reloc_scene.hpp"
+#include "support/alloc_counter.hpp"
+
+using namespace geojcbb;
+using geojcbb::test::allocations_during;
+using geojcbb::test::observe_from;
+
+namespace {
+
+using B = DefaultBounds;
+
+template <typename T>
+struct Rig {
+  node::SlamStep<T, B> step;
+  Observations<T, B> obs;
+  node::StepResult<T, B> out;
+};
+
+/// A step with the closure check, the map known and old (one empty scan reviewed), the filter at
+/// `believed` with a small (overconfident) covariance.
+template <typename T>
+std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& believed) {
+  auto rig = std::make_unique<Rig<T>>();
+  StepSettings<T> s;
+  s.strategy = Strategy::kJcbb;
+  s.local_radius_m = T(25);
+  s.max_range_m = T(20);
+  s.half_fov_rad = T(1.5);
+  s.augment = false;
+  s.confirm_hits = 1;
+  s.loop_check = true;
+  s.loop_age = 1;
+  REQUIRE(rig->step.configure(s) == Status::kOk);
+  REQUIRE(rig->step.reset(Pose2<T>{T(believed.x), T(believed.y), T(believed.theta)},
+                          Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal()) == Status::kOk);
+  for (const auto& l : map) {
+    FeatureId id = -1;
+    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+  }
+  rig->obs.clear();
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // every landmark one review unseen: old
+  return rig;
+}
+
+template <typename T>
+double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
+  return std::hypot(double(s.slam().pose().x) - x.x, double(s.slam().pose().y) - x.y);
+}
+
+}  // namespace
+
+TEST_CASE("loop: the set likelihood of a hand-computed case") {
+  using T = double;
+  reloc::AlignWorkspace<T, B> ws;
+  ws.clear_map();
+  REQUIRE(ws.push_landmark(Vec2<T>(5, 0), Mat2<T>::Identity() * 0.01) == Status::kOk);
+  REQUIRE(ws.push_landmark(Vec2<T>(0, 5), Mat2<T>::Identity() * 0.01) == Status::kOk);
+  Observations<T, B> obs;
+  Mat2<T> R;
+  R << 0.01, 0, 0, 1e-4;
+  REQUIRE(obs.push(Vec2<T>(5, 0), R) == Status::kOk);     // landmark (5, 0), exactly
+  REQUIRE(obs.push(Vec2<T>(3, -1.0), R) == Status::kOk);  // nothing there
+  reloc::AlignOptions<T> view;
+  view.max_range_m = 10;
+  view.half_fov_rad = kPi<T>;
+  reloc::AlignResult<T, B> res;
+  REQUIRE(reloc::align(obs, view, ws, res) == Status::kOk);  // prepares q, S; sorts the map by x
+  REQUIRE(ws.m[1].x() == 5.0);
+  ws.pick[0] = 1;
+  ws.pick[1] = -1;
+  reloc::SetModel<T> model;
+  model.p_detect = 0.8;
+  model.unexplained_density = 0.002;
+  // The pair: d2 0, S = J R J^T + P = diag(0.01, 25e-4) + 0.01 I, det 2.5e-4. The landmark (0, 5)
+  // is in view and missed; the second observation is unexplained.
+  const double expected =
+      std::log(0.8) - std::log(2 * kPi<double>) - 0.5 * std::log(2.5e-4) + std::log(0.002) + std::log(1 - 0.8);
+  CHECK(reloc::set_log_likelihood(ws, obs.count, Pose2<T>{}, view, model) == doctest::Approx(expected).epsilon(1e-12));
+  // Moving the pose 0.1 m along x adds d2 = 0.01 / 0.02 = 0.5 to the pair: half a nat less.
+  CHECK(reloc::set_log_likelihood(ws, obs.count, Pose2<T>{0.1, 0, 0}, view, model) ==
+        doctest::Approx(expected - 0.25).epsilon(1e-9));
+  // The view shrunk to the pair's side: no miss.
+  view.half_fov_rad = 1.0;
+  CHECK(reloc::set_log_likelihood(ws, obs.count, Pose2<T>{}, view, model) ==
+        doctest::Approx(expected - std::log(1 - 0.8)).epsilon(1e-12));
+}
+
+TEST_CASE_TEMPLATE("loop: a drifted filter's closure is held, committed on confirmation, and right", T, float, double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};  // drifted 2.7 m and 4.6 degrees
+  auto rig = make_rig<T>(map, believed);
+  observe_from(map, truth, rig->obs);
+  REQUIRE(rig->obs.count >= 8);
+  const Pose2<T> before = rig->step.slam().pose();
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
+  CHECK(rig->out.loop.ll_alignment >= rig->out.loop.ll_association + T(3));
+  CHECK(rig->out.loop.held >= 8);
+  int paired = 0;
+  for (int i = 0; i < rig->out.count; ++i) paired += rig->out.outcome[i] == node::Outcome::kPaired;
+  CHECK(paired == 0);  // nothing of the disputed closure reached the filter
+  CHECK(std::abs(double(rig->step.slam().pose().x - before.x)) < 1e-3);
+  // The same view again: the same correction wins a second time and is committed.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kCommitted);
+  paired = 0;
+  for (int i = 0; i < rig->out.count; ++i) paired += rig->out.outcome[i] == node::Outcome::kPaired;
+  CHECK(paired == rig->obs.count);
+  CHECK(position_error(rig->step, truth) < 0.05);
+  CHECK(std::abs(wrap_angle(double(rig->step.slam().pose().theta) - truth.theta)) < 0.005);
+  // The scan after: the landmarks it sees were just paired (no longer old); the old ones left in
+  // the region (out of view) dispute nothing, and every observation is paired as usual.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kConsistent);
+  CHECK(rig->out.loop.held == 0);
+  for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+}
+
+TEST_CASE("loop: a closure whose correction changes between scans is not committed") {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48}, other{-6, 1, 0.3};
+  auto rig = make_rig<double>(map, believed);
+  observe_from(map, truth, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  REQUIRE(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
+  observe_from(map, other, rig->obs);  // the filter did not move; the scan says another correction
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
+  CHECK(position_error(rig->step, believed) < 1e-6);
+}
+
+TEST_CASE("loop: a closure the alignment agrees with is left as the association made it") {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4};
+  auto rig = make_rig<double>(map, truth);
+  observe_from(map, truth, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kAgreed);
+  CHECK(rig->out.loop.held == 0);
+  for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+}
+
+TEST_CASE("loop: check_loop allocates nothing, and refuses a count mismatch with nothing changed") {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
+  auto rig = make_rig<double>(map, believed);
+  observe_from(map, truth, rig->obs);
+  Status st = Status::kNoConvergence;
+  CHECK(allocations_during([&] { st = rig->step.step(rig->obs, rig->out); }) == 0);
+  REQUIRE(st == Status::kOk);
+  REQUIRE(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
+  Association<double, B> assoc;
+  assoc.count = rig->obs.count + 1;
+  reloc::LoopStats<double> ls;
+  CHECK(rig->step.check_loop(rig->obs, assoc, ls) == Status::kInvalidInput);
+  // The pending closure survived the refused call: the next scan commits it.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kCommitted);
+}
+
+TEST_CASE("loop: the closure check off leaves the step as it was") {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
+  auto on = make_rig<double>(map, believed);
+  auto off = std::make_unique<Rig<double>>();
+  StepSettings<double> s;
+  s.strategy = Strategy::kJcbb;
+  s.local_radius_m = 25;
+  s.max_range_m = 20;
+  s.half_fov_rad = 1.5;
+  s.augment = false;
+  s.confirm_hits = 1;
+  REQUIRE(off->step.configure(s) == Status::kOk);
+  REQUIRE(off->step.reset(Pose2<double>{believed.x, believed.y, believed.theta},
+                          Vec3<double>(0.01, 0.01, 1e-4).asDiagonal()) == Status::kOk);
+  for (const auto& l : map) {
+    FeatureId id = -1;
+    REQUIRE(off->step.add_known_landmark(l, Mat2<double>::Identity() * 1e-4, id) == Status::kOk);
+  }
+  observe_from(map, truth, off->obs);
+  REQUIRE(off->step.step(off->obs, off->out) == Status::kOk);
+  CHECK(off->out.loop.verdict == reloc::LoopVerdict::kNone);
+  CHECK(off->out.counts.loop == 0u);
+}
+
+TEST_CASE_TEMPLATE("ekf: an update linearised at the estimate is the plain update; inflate_pose", T, float, double) {
+  ekf::Slam<T, B> a, b;
+  const Pose2<T> x0{T(1), T(2), T(0.3)};
+  const Mat3<T> P0 = Vec3<T>(T(0.04), T(0.04), T(0.01)).asDiagonal();
+  REQUIRE(a.reset(x0, P0) == Status::kOk);
+  REQUIRE(b.reset(x0, P0) == Status::kOk);
+  FeatureId id = -1;
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  REQUIRE(a.augment(Vec2<T>(T(5), T(0.2)), R, id) == Status::kOk);
+  REQUIRE(b.augment(Vec2<T>(T(5), T(0.2)), R, id) == Status::kOk);
+  Observations<T, B> obs;
+  REQUIRE(obs.push(Vec2<T>(T(5.1), T(0.21)), R) == Status::kOk);
+  Association<T, B> assoc;
+  assoc.count = 1;
+  assoc.feature[0] = id;
+  ekf::SlamWorkspace<T, B> ws;
+  const Pose2<T> at = a.pose();
+  REQUIRE(a.update(obs, assoc, ws) == Status::kOk);
+  REQUIRE(b.update(obs, assoc, ws, &at) == Status::kOk);
+  for (int r = 0; r < b.dim(); ++r) {
+    CHECK(a.x(r) == b.x(r));
+    for (int c = 0; c < b.dim(); ++c) CHECK(a.cov(r, c) == b.cov(r, c));
+  }
+  const Pose2<T> nan_pose{std::numeric_limits<T>::quiet_NaN(), T(0), T(0)};
+  CHECK(b.update(obs, assoc, ws, &nan_pose) == Status::kNonFinite);
+  // Inflation: Q added to the pose block, the pose-landmark correlation kept.
+  const T p02 = b.cov(0, 3), p00 = b.cov(0, 0);
+  REQUIRE(b.inflate_pose(Vec3<T>(T(1), T(2), T(0.1)).asDiagonal()) == Status::kOk);
+  CHECK(b.cov(0, 0) == doctest::Approx(double(p00 + T(1))));
+  CHECK(b.cov(0, 3) == p02);
+  const Mat3<T> Prr = b.pose_covariance();
+  CHECK(b.inflate_pose(Vec3<T>(T(-1), T(0), T(0)).asDiagonal()) == Status::kNotPositiveDefinite);
+  Mat3<T> asym = Mat3<T>::Zero();
+  asym(0, 1) = T(1);
+  CHECK(b.inflate_pose(asym) == Status::kNotSymmetric);
+  CHECK(b.inflate_pose(Vec3<T>(std::numeric_limits<T>::infinity(), T(0), T(0)).asDiagonal()) == Status::kNonFinite);
+  CHECK(b.pose_covariance() == Prr);
+  CHECK(b.replace_pose_covariance(-Prr) == Status::kNotPositiveDefinite);
+  CHECK(b.pose_covariance() == Prr);
+}
