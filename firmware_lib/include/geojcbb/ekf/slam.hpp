@@ -142,6 +142,48 @@ class Slam {
     return Status::kOk;
   }
 
+  /// Relocalisation at a pose fitted to mapped landmarks (reloc::fit_sensitivities): linearised,
+  /// x - x* = sum_i A_i (l_i - l_i*) + e, e the observations' part with covariance Pobs. The pose gets
+  /// covariance Pobs + sum_ik A_i P_{l_i l_k} A_k^T and cross-covariance sum_i A_i P_{l_i, c} with every
+  /// landmark column c: the map's own error moves the fitted pose with it, so it is not counted as
+  /// the pose's alone (relocalise() would: the pose independent of the map it was fitted to).
+  /// At[i] = A_i^T (2x3) and lm[i] (a landmark index) for i < pairs.  O(n pairs + pairs^2)
+  /// @return as relocalise(); kInvalidInput for pairs or an index out of range. Nothing changes
+  ///         unless kOk.
+  [[nodiscard]] Status relocalise_fitted(const Pose2<T>& x, const Mat3<T>& Pobs, int pairs, const std::int16_t* lm,
+                                         const Mat23<T>* At) {
+    const Status s = check_pose_prior(x, Pobs);
+    if (s != Status::kOk) return s;
+    if (pairs < 0 || pairs > B::kMaxObservations) return Status::kInvalidInput;
+    for (int i = 0; i < pairs; ++i) {  // <= kMaxObservations
+      if (lm[i] < 0 || lm[i] >= landmarks()) return Status::kInvalidInput;
+    }
+    Mat3<T> Prr = symmetric_part(Pobs);
+    for (int i = 0; i < pairs; ++i) {    // <= kMaxObservations
+      for (int k = 0; k < pairs; ++k) {  // <= kMaxObservations
+        const Mat2<T> Pik = P_.template block<2, 2>(Layout::landmark(lm[i]), Layout::landmark(lm[k]));
+        Prr += At[i].transpose() * Pik * At[k];
+      }
+    }
+    Prr = symmetric_part(Prr);
+    if (!Prr.allFinite()) return Status::kNonFinite;
+    if (!is_spd_scaled<T>(Prr)) return Status::kNotPositiveDefinite;
+    // The cross blocks read landmark-landmark entries only: written in place, column by column.
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
+      Mat32<T> Prl = Mat32<T>::Zero();
+      for (int i = 0; i < pairs; ++i) {  // <= kMaxObservations
+        Prl += At[i].transpose() * P_.template block<2, 2>(Layout::landmark(lm[i]), Layout::landmark(j));
+      }
+      P_.template set_block<3, 2>(0, Layout::landmark(j), Prl);
+    }
+    x_[0] = x.x;
+    x_[1] = x.y;
+    x_[2] = wrap_angle(x.theta);
+    updated_ = false;
+    P_.template set_sym<3>(0, Prr);
+    return Status::kOk;
+  }
+
   /// Adds Q (3x3, symmetric positive semi-definite) to the pose block, keeping the pose's
   /// correlation with the map: a loop closure's commit (reloc/loop.hpp) lets the closure move the
   /// pose, and through the correlations the landmarks mapped during the drift.

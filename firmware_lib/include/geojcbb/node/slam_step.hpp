@@ -230,6 +230,7 @@ class SlamStep {
     align_ws_.clear_map();
     for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
       if (slam_.hits(j) < policy_.confirm_hits) continue;
+      align_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
       const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
       if (st != Status::kOk) return st;
     }
@@ -247,7 +248,20 @@ class SlamStep {
         lost(r, c) = slam_.cov(r, c);
       }
     }
-    st = slam_.relocalise(align_out_.pose, align_out_.cov * reloc_inflation_);
+    // Re-set with the pose's correlation to the landmarks it was fitted to (their error moves the
+    // fit); the observations' part of its covariance times reloc_inflation. The sensitivities go
+    // through the update's scratch (ekf_ws_: Hp, lm), unused until prepare().
+    Mat3<T> Pobs;
+    const int pairs =
+        reloc::fit_sensitivities(align_ws_, obs.count, align_out_.pose, ekf_ws_.Hp.data(), ekf_ws_.lm.data(), Pobs);
+    for (int k = 0; k < pairs; ++k) {  // <= kMaxObservations: sorted map index -> filter index
+      ekf_ws_.lm[static_cast<std::size_t>(k)] =
+          align_slam_[static_cast<std::size_t>(align_ws_.index[ekf_ws_.lm[static_cast<std::size_t>(k)]])];
+    }
+    st = pairs >= 2 ? slam_.relocalise_fitted(align_out_.pose, Pobs * reloc_inflation_, pairs, ekf_ws_.lm.data(),
+                                              ekf_ws_.Hp.data())
+                    : Status::kNotPositiveDefinite;
+    if (st != Status::kOk) st = slam_.relocalise(align_out_.pose, align_out_.cov * reloc_inflation_);
     if (st != Status::kOk) return st;
     lost_cov_ = lost;
     rs.relocalised = true;
@@ -310,9 +324,15 @@ class SlamStep {
     align_ws_.clear_map();
     for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
       if (!old(j) || (slam_.landmark(j) - Vec2<T>(xp.x, xp.y)).squaredNorm() > reach * reach) continue;
-      loop_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
+      align_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
       const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
       if (st != Status::kOk) return st;
+    }
+    // An observation the association paired with a landmark that is not old is explained where
+    // the filter is: no closure's, so left out of both.
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      align_ws_.skip[static_cast<std::size_t>(i)] = j >= 0 && !old(j);
     }
     Status st = reloc::align(obs, loop_align_, align_ws_, align_out_);
     if (st != Status::kOk) return st;
@@ -326,7 +346,7 @@ class SlamStep {
       const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
       if (j < 0 || !old(j)) continue;
       for (int k = 0; k < align_ws_.n; ++k) {  // <= kMaxLandmarks
-        if (loop_slam_[static_cast<std::size_t>(align_ws_.index[k])] == j)
+        if (align_slam_[static_cast<std::size_t>(align_ws_.index[k])] == j)
           align_ws_.pick[i] = static_cast<std::int16_t>(k);
       }
     }
@@ -382,7 +402,7 @@ class SlamStep {
       if (!disputed) continue;
       ++ls.held;
       if (commit_now && align_ws_.pick[i] >= 0) {
-        const int k = loop_slam_[static_cast<std::size_t>(align_ws_.index[align_ws_.pick[i]])];
+        const int k = align_slam_[static_cast<std::size_t>(align_ws_.index[align_ws_.pick[i]])];
         assoc.feature[i] = slam_.id(k);
         assoc.d2[i] = align_ws_.pick_d2[i];
         assoc.candidate[i] = -1;
@@ -446,21 +466,17 @@ class SlamStep {
                               CounterFn clock = nullptr) {
     if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
     const std::uint32_t t2 = clock ? clock() : 0;
-    Status st = Status::kOk;
-    if (closing_) {  // a committed loop closure (check_loop): inflate, update at the closure's pose
-      closing_ = false;
-      const Mat3<T> before = slam_.pose_covariance();
-      st = slam_.inflate_pose(close_Q_);
-      if (st != Status::kOk) return st;
-      st = slam_.update(obs, assoc, ekf_ws_, &close_at_);
-      if (st != Status::kOk) {
-        // Undone: the pose block as it was (it was positive definite, the write cannot fail).
-        (void)slam_.replace_pose_covariance(before);
-        return st;
-      }
-    } else {
-      st = slam_.update(obs, assoc, ekf_ws_);
-      if (st != Status::kOk) return st;
+    // A committed loop closure (check_loop): the pose block inflated, the update at its pose.
+    const bool closing = closing_;
+    closing_ = false;
+    const Mat3<T> before = slam_.pose_covariance();
+    Status st = closing ? slam_.inflate_pose(close_Q_) : Status::kOk;
+    if (st != Status::kOk) return st;
+    st = slam_.update(obs, assoc, ekf_ws_, closing ? &close_at_ : nullptr);
+    if (st != Status::kOk) {
+      // Undone: the pose block as it was (it was positive definite, the write cannot fail).
+      if (closing) (void)slam_.replace_pose_covariance(before);
+      return st;
     }
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
@@ -527,12 +543,12 @@ class SlamStep {
   bool skip_confirm_ = false;
   Localisation state_ = Localisation::kTracking;
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
-  // The closure check (StepSettings::loop_check): its options, memory, the old landmarks' filter
-  // indices in push order, and a committed closure for commit().
+  // The closure check (StepSettings::loop_check): its options, memory, the aligned landmarks' filter
+  // indices in push order (the relocaliser's too), and a committed closure for commit().
   reloc::LoopOptions<T> loop_opt_;
   reloc::AlignOptions<T> loop_align_;  ///< the relocaliser's, with loop_min_inliers
   reloc::LoopState<T> loop_state_;
-  std::array<std::int16_t, B::kMaxLandmarks> loop_slam_{};
+  std::array<std::int16_t, B::kMaxLandmarks> align_slam_{};
   bool loop_ = false, closing_ = false;
   Pose2<T> close_at_{};
   Mat3<T> close_Q_ = Mat3<T>::Zero();

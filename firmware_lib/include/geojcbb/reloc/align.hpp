@@ -108,7 +108,13 @@ struct AlignWorkspace {
   std::array<bool, kTopPoses> top_plausible;
   std::array<T, kMaxBasePairs> base_len;
 
-  void clear_map() { n = 0; }
+  /// Per observation: left out of the alignment (no base pair, never an inlier, no term of the set
+  /// likelihood); the caller's, reset by clear_map().
+  std::array<bool, B::kMaxObservations> skip{};
+  void clear_map() {
+    n = 0;
+    skip.fill(false);
+  }
   /// @return kOk; kCapacityExceeded when MaxLandmarks are in; kNonFinite; kNotPositiveDefinite
   ///         for a P that is not a covariance. Nothing is added unless kOk.
   [[nodiscard]] Status push_landmark(const Vec2<T>& mean, const Mat2<T>& cov) {
@@ -183,7 +189,7 @@ Candidate<T> score(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T g
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     if (c.inliers + (m - i) < need) break;
     T d2 = T(0);
-    if (nearest(ws, i, x, Rot, gate_d2, d2) >= 0) {
+    if (!ws.skip[i] && nearest(ws, i, x, Rot, gate_d2, d2) >= 0) {
       ++c.inliers;
       c.cost += d2;
     }
@@ -229,7 +235,8 @@ template <typename T, class B>
 int exclusive_inliers(AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate_d2) {
   const Mat2<T> Rot = rotation(x.theta);
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    ws.pick[i] = static_cast<std::int16_t>(nearest(ws, i, x, Rot, gate_d2, ws.pick_d2[i]));
+    ws.pick[i] =
+        ws.skip[i] ? std::int16_t(-1) : static_cast<std::int16_t>(nearest(ws, i, x, Rot, gate_d2, ws.pick_d2[i]));
   }
   int count = 0;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
@@ -337,6 +344,56 @@ int misses(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const Align
 
 }  // namespace align_detail
 
+/// The accepted pose's sensitivity to the landmarks it was fitted to, for a relocalisation that
+/// keeps the pose's correlation with the map (ekf::Slam::relocalise_fitted): over the pairs in
+/// ws.pick at pose x (after align(), the accepted pose's exclusive inliers), with
+/// W_i = (R Sigma_i R^T + P_j)^-1, J_i = [I, dR/dtheta q_i] and C = (sum J_i^T W_i J_i)^-1,
+/// A_i = C J_i^T W_i (x moves by A_i when landmark j does); At[k] = A_i^T and map[k] = ws.pick[i]
+/// (sorted map index) for the k-th pair; Pobs = sum A_i R Sigma_i R^T A_i^T, the observations'
+/// part of the pose's covariance. @return the pairs (0 when the information is not positive
+/// definite). Bound: 2 m.
+template <typename T, class B>
+int fit_sensitivities(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, Mat23<T>* At, std::int16_t* map,
+                      Mat3<T>& Pobs) {
+  using namespace align_detail;
+  const Mat2<T> Rot = rotation(x.theta);
+  Mat2<T> dRot;
+  dRot << -Rot(1, 0), -Rot(0, 0), Rot(0, 0), -Rot(1, 0);  // dR/dtheta
+  Mat3<T> info = Mat3<T>::Zero();
+  int pairs = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations: J_i^T W_i in At, for now
+    if (ws.pick[i] < 0) continue;
+    Mat23<T> J;
+    J.template leftCols<2>() = Mat2<T>::Identity();
+    J.col(2) = dRot * ws.q[i];
+    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[ws.pick[i]];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(S(0, 0) > T(0) && det > T(0))) return 0;
+    Mat2<T> W;
+    W << S(1, 1) / det, -S(0, 1) / det, -S(1, 0) / det, S(0, 0) / det;
+    At[pairs] = (J.transpose() * W).transpose();  // W J (2x3)
+    info += J.transpose() * W * J;
+    map[pairs] = ws.pick[i];
+    ++pairs;
+  }
+  const Eigen::LLT<Mat3<T>> llt(info);
+  if (pairs < 2 || llt.info() != Eigen::Success) return 0;
+  Mat3<T> C;
+  for (int k = 0; k < 3; ++k) C.col(k) = llt.solve(Vec3<T>::Unit(k));  // <= 3: vector solves
+  C = symmetric_part(C);
+  Pobs = Mat3<T>::Zero();
+  int k = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    At[k] = At[k] * C;  // (C J^T W)^T = W J C
+    const Mat2<T> Sq = Rot * ws.S[i] * Rot.transpose();
+    Pobs += At[k].transpose() * Sq * At[k];
+    ++k;
+  }
+  Pobs = symmetric_part(Pobs);
+  return all_finite(Pobs) ? pairs : 0;
+}
+
 /// The pose of the robot from one scan against the map in ws (see the file's head).
 /// @return kOk (out written, accepted or not); kInvalidInput for bad options; the statuses of
 ///         validate_observations. Nothing is written to `out` unless kOk.
@@ -382,6 +439,7 @@ template <typename T, class B>
   std::array<T, kMaxBasePairs>& base_len = ws.base_len;
   for (int a = 0; a < m; ++a) {        // <= kMaxObservations
     for (int b = a + 1; b < m; ++b) {  // <= kMaxObservations
+      if (ws.skip[a] || ws.skip[b]) continue;
       const T len = (ws.q[a] - ws.q[b]).norm();
       if (!(len >= opt.min_base_m)) continue;
       int at = bases;

@@ -52,6 +52,7 @@ T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, c
   const T log_2pi = std::log(T(2) * kPi<T>);
   T ll = T(0);
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.skip[i]) continue;
     if (ws.pick[i] < 0) {
       ll += std::log(model.unexplained_density);
       continue;
