@@ -1,6 +1,7 @@
 #include "geojcbb_host/sim.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -21,10 +22,35 @@ std::vector<Eigen::Vector2d> points(const nlohmann::json& a, const std::string& 
   return out;
 }
 
-// Landmarks: an explicit list, or {"random": {"count", "min_x", "max_x", "min_y", "max_y",
-// "min_separation_m", "seed"}}.
+// Landmarks: an explicit list, {"random": {"count", "min_x", "max_x", "min_y", "max_y",
+// "min_separation_m", "seed"}}, or {"grid": {"min_x", "max_x", "min_y", "max_y", "spacing_m"}} (a
+// regular lattice, every landmark alike; optional "keep_out": [[min_x, max_x, min_y, max_y], ...]
+// rectangles left empty).
 std::vector<Eigen::Vector2d> landmarks(const nlohmann::json& j) {
   if (j.is_array()) return points(j, "landmarks");
+  if (j.contains("grid")) {
+    const auto& g = j.at("grid");
+    const double x0 = g.at("min_x").get<double>(), x1 = g.at("max_x").get<double>();
+    const double y0 = g.at("min_y").get<double>(), y1 = g.at("max_y").get<double>();
+    const double step = g.at("spacing_m").get<double>();
+    if (!(step > 0) || !(x1 >= x0) || !(y1 >= y0)) throw std::runtime_error("landmarks.grid: bad extent or spacing");
+    std::vector<std::array<double, 4>> out_rects;
+    for (const auto& r : g.value("keep_out", nlohmann::json::array())) {
+      if (!r.is_array() || r.size() != 4)
+        throw std::runtime_error("landmarks.grid.keep_out: [min_x, max_x, min_y, max_y]");
+      out_rects.push_back({r[0].get<double>(), r[1].get<double>(), r[2].get<double>(), r[3].get<double>()});
+    }
+    std::vector<Eigen::Vector2d> out;
+    for (double x = x0; x <= x1 + 1e-9; x += step) {
+      for (double y = y0; y <= y1 + 1e-9; y += step) {
+        const bool kept_out = std::any_of(out_rects.begin(), out_rects.end(), [&](const std::array<double, 4>& r) {
+          return x >= r[0] && x <= r[1] && y >= r[2] && y <= r[3];
+        });
+        if (!kept_out) out.emplace_back(x, y);
+      }
+    }
+    return out;
+  }
   const auto& r = j.at("random");
   std::mt19937_64 rng(r.value("seed", 1ULL));
   std::uniform_real_distribution<double> ux(r.at("min_x").get<double>(), r.at("max_x").get<double>());

@@ -26,6 +26,16 @@ TEST_CASE("the bundled scenarios load") {
     CHECK(s.landmarks.size() >= 100);
     CHECK(s.waypoints.size() >= 4);
   }
+  // The lattice scenes: a regular grid, every landmark on it; noloop's band between the lanes empty.
+  const Scenario lat = load_scenario(scenario_path("lattice"));
+  CHECK(lat.landmarks.size() == 15u * 15u);
+  for (const auto& l : lat.landmarks) {
+    CHECK(std::fmod(l.x() + 105.0, 15.0) == doctest::Approx(0.0));
+    CHECK(std::fmod(l.y() + 105.0, 15.0) == doctest::Approx(0.0));
+  }
+  const Scenario nl = load_scenario(scenario_path("noloop"));
+  CHECK(nl.landmarks.size() == 37u * 6u);  // x -110..110 by 6 m; rows -36, -30, -24 and -6, 0, 6
+  for (const auto& l : nl.landmarks) CHECK((l.y() < -23 || l.y() > -7));
   const Scenario e1 = load_scenario(scenario_path("env1"));
   CHECK(e1.sigma_range_m == doctest::Approx(0.1));
   CHECK(e1.sigma_bearing_rad == doctest::Approx(kPi<double> / 180));
@@ -100,5 +110,8 @@ TEST_CASE("a bad scenario file is reported with its path") {
   std::ofstream(p) << R"({"landmarks": [[0, 0]], "waypoints": [[0, 0], [1, 1]], "dt_s": -1})";
   CHECK_THROWS_AS(load_scenario(p), std::runtime_error);
   CHECK_THROWS_AS(load_scenario((dir / "no_such_file.json").string()), std::runtime_error);
+  std::ofstream(p) << R"({"landmarks": {"grid": {"min_x": 0, "max_x": 10, "min_y": 0, "max_y": 10, "spacing_m": 0}},
+                          "waypoints": [[0, 0], [1, 1]]})";
+  CHECK_THROWS_WITH_AS(load_scenario(p), doctest::Contains("spacing"), std::runtime_error);
   std::filesystem::remove_all(dir);
 }

@@ -550,8 +550,11 @@ class Slam {
   /// other ids are unchanged).
   /// @return kOk; kInvalidInput for a bad policy or view, or counts out of range. No state changes
   ///         unless kOk.
-  [[nodiscard]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
-                              const LandmarkPolicy& policy, ReviewStats& stats) {
+  /// Out of line: its keep[] (2 bytes a landmark) inlined into the caller's frame took
+  /// node::SlamStep::commit past 512 B at the large bounds.
+  [[nodiscard, gnu::noinline]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
+                                             const Visibility<T>& view, const LandmarkPolicy& policy,
+                                             ReviewStats& stats) {
     if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
         !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
         !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {

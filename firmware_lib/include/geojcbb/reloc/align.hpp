@@ -101,7 +101,7 @@ struct AlignWorkspace {
   std::array<T, B::kMaxObservations> radius;           ///< per observation: inlier search radius [m]
   std::array<std::int16_t, B::kMaxObservations> pick;  ///< per observation: sorted landmark or -1
   std::array<T, B::kMaxObservations> pick_d2;
-  std::array<std::int8_t, 2 * kMaxBasePairs> base;  ///< observation pairs (a, b), longest first
+  std::array<std::uint8_t, 2 * kMaxBasePairs> base;  ///< observation pairs (a, b), longest first
   std::array<align_detail::Candidate<T>, kTopPoses> top;
   std::array<Mat3<T>, kTopPoses> top_cov;  ///< the refined poses' fit covariances
   std::array<int, kTopPoses> top_misses;
@@ -452,8 +452,8 @@ template <typename T, class B>
         ws.base[2 * q + 1] = ws.base[2 * q - 1];
       }
       base_len[at] = len;
-      ws.base[2 * at] = static_cast<std::int8_t>(a);
-      ws.base[2 * at + 1] = static_cast<std::int8_t>(b);
+      ws.base[2 * at] = static_cast<std::uint8_t>(a);
+      ws.base[2 * at + 1] = static_cast<std::uint8_t>(b);
       if (bases < opt.base_pairs) ++bases;
     }
   }
