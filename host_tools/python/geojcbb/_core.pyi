@@ -37,7 +37,8 @@ class Diagnostics(TypedDict):
 class Options(TypedDict, total=False):
     """The keyword options of associate() and Slam(), one per line of the option table
     (firmware_lib/include/geojcbb/core/options.h; docs/options.md gives ranges and meanings).
-    tests/test_geojcbb.py keeps this list equal to OPTIONS."""
+    The keywords are generated from the table (geojcbb_options_doc; CTest options.stub_current)."""
+    # BEGIN GENERATED: option keywords (cmake --build build/host-release --target options_docs; do not edit)
     confidence: float  # default 0.99
     new_landmark_level: float  # default 0.999
     local_radius_m: float  # default 10
@@ -87,6 +88,7 @@ class Options(TypedDict, total=False):
     loop_inflation: float  # default 4
     loop_detection_probability: float  # default 0.9
     loop_unexplained_density: float  # default 0.003
+    # END GENERATED: option keywords
 
 
 class AssociationResult(TypedDict):
