@@ -5,12 +5,14 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/range_bearing.hpp"
+#include "geojcbb/node/slam_step.hpp"
 
 namespace geojcbb::test {
 
@@ -41,6 +43,48 @@ void observe_from(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& 
     if (r > 20 || std::abs(b) > 1.5 || obs.count >= B::kMaxObservations) continue;
     REQUIRE(obs.push(Vec2<T>(T(r), T(b)), R) == Status::kOk);
   }
+}
+
+/// A SLAM step, its scan and its result (heap-held by the tests: the step is large).
+template <typename T, class B>
+struct RelocRig {
+  node::SlamStep<T, B> step;
+  Observations<T, B> obs;
+  node::StepResult<T, B> out;
+};
+
+/// The scene's step settings: JCBB, the sensor of observe_from, a known map (nothing added, every
+/// landmark confirmed); the caller switches the relocaliser or the loop check in.
+template <typename T>
+StepSettings<T> reloc_settings() {
+  StepSettings<T> s;
+  s.strategy = Strategy::kJcbb;
+  s.local_radius_m = T(25);
+  s.max_range_m = T(20);
+  s.half_fov_rad = T(1.5);
+  s.augment = false;
+  s.confirm_hits = 1;
+  return s;
+}
+
+/// A step configured with `s`, at pose x0 with covariance P0, the landmarks of `map` known (1e-4 m^2).
+template <typename T, class B>
+std::unique_ptr<RelocRig<T, B>> make_known_map_rig(const std::vector<Eigen::Vector2d>& map, const StepSettings<T>& s,
+                                                   const Pose2<double>& x0, const Mat3<T>& P0) {
+  auto rig = std::make_unique<RelocRig<T, B>>();
+  REQUIRE(rig->step.configure(s) == Status::kOk);
+  REQUIRE(rig->step.reset(Pose2<T>{T(x0.x), T(x0.y), T(x0.theta)}, P0) == Status::kOk);
+  for (const auto& l : map) {
+    FeatureId id = -1;
+    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+  }
+  return rig;
+}
+
+/// Distance from the step's position estimate to x's [m].
+template <typename T, class B>
+double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
+  return std::hypot(double(s.slam().pose().x) - x.x, double(s.slam().pose().y) - x.y);
 }
 
 }  // namespace geojcbb::test

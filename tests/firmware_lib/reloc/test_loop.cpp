@@ -16,47 +16,26 @@
 using namespace geojcbb;
 using geojcbb::test::allocations_during;
 using geojcbb::test::observe_from;
+using geojcbb::test::position_error;
 
 namespace {
 
 using B = DefaultBounds;
 
 template <typename T>
-struct Rig {
-  node::SlamStep<T, B> step;
-  Observations<T, B> obs;
-  node::StepResult<T, B> out;
-};
+using Rig = test::RelocRig<T, B>;
 
-/// A step with the closure check, the map known and old (one empty scan reviewed), the filter at
-/// `believed` with a small (overconfident) covariance.
+/// The filter at `believed` with a small (overconfident) covariance, the map known.
 template <typename T>
-std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& believed) {
-  auto rig = std::make_unique<Rig<T>>();
-  StepSettings<T> s;
-  s.strategy = Strategy::kJcbb;
-  s.local_radius_m = T(25);
-  s.max_range_m = T(20);
-  s.half_fov_rad = T(1.5);
-  s.augment = false;
-  s.confirm_hits = 1;
-  s.loop_check = true;
+std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& believed,
+                                 bool loop_check = true) {
+  StepSettings<T> s = test::reloc_settings<T>();
+  s.loop_check = loop_check;
   s.loop_age = 1;
-  REQUIRE(rig->step.configure(s) == Status::kOk);
-  REQUIRE(rig->step.reset(Pose2<T>{T(believed.x), T(believed.y), T(believed.theta)},
-                          Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal()) == Status::kOk);
-  for (const auto& l : map) {
-    FeatureId id = -1;
-    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
-  }
+  auto rig = test::make_known_map_rig<T, B>(map, s, believed, Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal());
   rig->obs.clear();
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // every landmark one review unseen: old
   return rig;
-}
-
-template <typename T>
-double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
-  return std::hypot(double(s.slam().pose().x) - x.x, double(s.slam().pose().y) - x.y);
 }
 
 }  // namespace
@@ -173,22 +152,7 @@ TEST_CASE("loop: check_loop allocates nothing, and refuses a count mismatch with
 TEST_CASE("loop: the closure check off leaves the step as it was") {
   const auto map = test::reloc_map();
   const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
-  auto on = make_rig<double>(map, believed);
-  auto off = std::make_unique<Rig<double>>();
-  StepSettings<double> s;
-  s.strategy = Strategy::kJcbb;
-  s.local_radius_m = 25;
-  s.max_range_m = 20;
-  s.half_fov_rad = 1.5;
-  s.augment = false;
-  s.confirm_hits = 1;
-  REQUIRE(off->step.configure(s) == Status::kOk);
-  REQUIRE(off->step.reset(Pose2<double>{believed.x, believed.y, believed.theta},
-                          Vec3<double>(0.01, 0.01, 1e-4).asDiagonal()) == Status::kOk);
-  for (const auto& l : map) {
-    FeatureId id = -1;
-    REQUIRE(off->step.add_known_landmark(l, Mat2<double>::Identity() * 1e-4, id) == Status::kOk);
-  }
+  auto off = make_rig<double>(map, believed, false);
   observe_from(map, truth, off->obs);
   REQUIRE(off->step.step(off->obs, off->out) == Status::kOk);
   CHECK(off->out.loop.verdict == reloc::LoopVerdict::kNone);

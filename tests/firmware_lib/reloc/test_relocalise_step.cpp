@@ -16,45 +16,24 @@
 using namespace geojcbb;
 using geojcbb::test::allocations_during;
 using geojcbb::test::observe_from;
+using geojcbb::test::position_error;
 
 namespace {
 
 using B = DefaultBounds;
 
 template <typename T>
-struct Rig {
-  node::SlamStep<T, B> step;
-  Observations<T, B> obs;
-  node::StepResult<T, B> out;
-};
+using Rig = test::RelocRig<T, B>;
 
 /// A step with the relocaliser, the map known (the true landmarks), the robot at `x0`.
 template <typename T>
 std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x0, bool reloc = true) {
-  auto rig = std::make_unique<Rig<T>>();
-  StepSettings<T> s;
-  s.strategy = Strategy::kJcbb;
-  s.local_radius_m = T(25);
-  s.max_range_m = T(20);
-  s.half_fov_rad = T(1.5);
-  s.augment = false;
-  s.confirm_hits = 1;
+  StepSettings<T> s = test::reloc_settings<T>();
   s.relocalise = reloc;
-  REQUIRE(rig->step.configure(s) == Status::kOk);
-  REQUIRE(rig->step.reset(Pose2<T>{T(x0.x), T(x0.y), T(x0.theta)}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
-  for (const auto& l : map) {
-    FeatureId id = -1;
-    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
-  }
-  return rig;
+  return test::make_known_map_rig<T, B>(map, s, x0, Mat3<T>::Identity() * T(1e-4));
 }
 
 Mat3<double> kidnap_cov() { return Vec3<double>(225, 225, 9.8).asDiagonal(); }
-
-template <typename T>
-double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {
-  return std::hypot(double(s.slam().pose().x) - x.x, double(s.slam().pose().y) - x.y);
-}
 
 }  // namespace
 
