@@ -4,9 +4,12 @@
 //   -> group (none | k-means | DBSCAN | GMM-EM; skipped when seeded)
 //   -> search per group (ICNN | JCBB, one node budget shared by the groups; extends the seed;
 //      RJC instead of JCBB for a large ungrouped scan when asked)
-//   -> merge (mutual exclusion across groups, joint re-check) -> decline (ambiguous pairings left
-//   kUnmatched, when an ambiguity margin is set) -> verify (pairings outside the answer's largest
-//   pairwise consistent subset dropped; the pose-free consistency round) -> result
+//   -> merge (mutual exclusion across groups, joint re-check)
+//   -> decline (ambiguous pairings left kUnmatched, when an ambiguity margin is set)
+//   -> verify (pairings outside the answer's largest pairwise consistent subset dropped; the
+//      pose-free consistency round)
+//   -> the answer's joint D2 (computed once, unless the search knows it and nothing changed it)
+//   -> result
 // No heap: all working memory is the caller's AssociationWorkspace; outputs are written only on kOk, at the end,
 // so a stage may check what it reads (C's cross blocks, the packed-covariance round) and still leave them untouched.
 #pragma once
@@ -145,6 +148,100 @@ template <typename T, class B>
   return Status::kOk;
 }
 
+/// Search stage, one per branch: ICNN; JCBB extending the seed; RJC for a large ungrouped scan; or
+/// JCBB per group and the merge. Each leaves in ws the hypothesis, ws.declined (ambiguous
+/// observations, marked only when an ambiguity margin is set) and in `joint_d2` the hypothesis's D2
+/// when the search knows it, -1 otherwise.
+/// @return kOk; kNotPositiveDefinite (C not PSD) from a joint test.
+template <typename T, class B>
+[[nodiscard]] Status search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                            const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
+                            AssociationDiagnostics& diag, T& joint_d2) {
+  const int m = obs.count;
+  const bool decline = cfg.ambiguity_margin > T(0);
+  joint_d2 = T(-1);
+  SearchOutcome<T, B>& o = ws.outcome;
+  if (cfg.search == SearchMethod::kIcnn) {
+    icnn_search(m, cfg.mutual_exclusion, ws.table, ws.jcbb, pred.count, o);
+    const CompatibilityTable<T, B>& t = ws.table;
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      ws.hyp[i] = o.best[i];
+      if (!decline || o.best[i] < 0) continue;
+      // Ambiguous: another compatible candidate within the margin of the chosen one.
+      T chosen = T(0);
+      for (int q = 0; q < t.count[i]; ++q)  // <= kMaxCandidates
+        if (t.cand[i][q] == o.best[i]) chosen = t.d2[i][q];
+      for (int q = 0; q < t.count[i]; ++q) {  // <= kMaxCandidates
+        const T gap = t.d2[i][q] > chosen ? t.d2[i][q] - chosen : chosen - t.d2[i][q];
+        if (t.cand[i][q] != o.best[i] && gap < cfg.ambiguity_margin) ws.declined[i] = true;
+      }
+    }
+    return Status::kOk;
+  }
+  bool seeded = false;
+  if (cfg.seed) {
+    const Status s = seed(obs, pred, cfg, ws, diag, seeded);
+    if (s != Status::kOk) return s;
+  }
+  if (seeded) {  // one search over the unseeded observations, extending the seed
+    for (int i = 0; i < m; ++i) ws.seed_label[i] = ws.seed[i] >= 0 ? 1 : 0;  // <= kMaxObservations
+    diag.seed_used = true;
+    diag.groups = 1;
+    const Status s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0}, cfg.node_budget,
+                                 ws.jcbb, o, &ws.seed);
+    if (s != Status::kOk) return s;
+    diag.jcbb_nodes = o.nodes;
+    diag.node_budget_hit = o.budget_hit;
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      ws.hyp[i] = ws.seed[i] >= 0 ? ws.seed[i] : o.best[i];
+      ws.declined[i] = ws.seed[i] < 0 && decline && o.ambiguous(i, cfg.ambiguity_margin);
+    }
+    joint_d2 = o.joint_d2;
+    return Status::kOk;
+  }
+  if (cfg.rjc && compatible_observations(m, ws.table) > cfg.rjc_subset) {
+    RjcStats st;
+    const Status s = rjc_search(obs, pred, cfg, ws.table, cfg.node_budget, cfg.rjc_tries, cfg.rjc_subset, cfg.rjc_seed,
+                                ws.jcbb, o, ws.rjc, ws.hyp, joint_d2, st);
+    if (s != Status::kOk) return s;
+    diag.rjc_used = true;
+    diag.groups = 1;
+    diag.jcbb_nodes = st.nodes;
+    diag.node_budget_hit = st.budget_hit;
+    return Status::kOk;
+  }
+  group(obs, cfg, ws, diag);
+  diag.groups = static_cast<std::uint8_t>(ws.groups.count);
+  NodeCount nodes_left = cfg.node_budget;
+  for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
+  for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
+    const Status s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left,
+                                 ws.jcbb, o, cfg.condition_groups ? &ws.hyp : nullptr);
+    if (s != Status::kOk) return s;
+    nodes_left -= o.nodes;
+    diag.jcbb_nodes += o.nodes;
+    diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      if (ws.groups.label[i] != g) continue;
+      ws.hyp[i] = o.best[i];
+      ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
+    }
+    joint_d2 = o.joint_d2;
+  }
+  // Conditioned groups: the last search's D2 covers the whole union. Independent groups: the union's
+  // D2 is computed by the merge.
+  if (ws.groups.count != 1 && !cfg.condition_groups) joint_d2 = T(-1);
+  MergeStats ms;
+  const Status s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
+  if (s != Status::kOk) return s;
+  diag.merge_conflicts = ms.conflicts;
+  diag.recheck_failed = ms.recheck_failed;
+  diag.recheck_dropped = ms.repair_dropped;
+  diag.jcbb_nodes += ms.repair_nodes;
+  diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
+  return Status::kOk;
+}
+
 }  // namespace pipeline_detail
 
 /// Associates one scan's observations with the predicted candidates.
@@ -156,8 +253,8 @@ template <typename T, class B>
 /// @return kOk (an empty scan gives an empty answer; spent budgets are flagged in out.diag);
 ///         otherwise the first failing check of validate(); kNonFinite / kNotSymmetric for a cross
 ///         entry of C found bad where a joint or pairwise test reads it (CovarianceCheck::kWhereRead);
-///         or kNotPositiveDefinite when C is found
-///         indefinite during a joint test or a pairwise distance test (seed, verify).
+///         or kNotPositiveDefinite when C is found indefinite during a joint test or a pairwise
+///         distance test (seed, verify).
 template <typename T, class B>
 [[nodiscard]] Status associate(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
@@ -169,108 +266,21 @@ template <typename T, class B>
   const int m = obs.count;
   AssociationDiagnostics diag{};
   build_compatibility(obs, pred, cfg, ws.table, diag);
-  T joint_d2 = T(0);
-  const bool decline = cfg.ambiguity_margin > T(0);
   for (int i = 0; i < m; ++i) ws.declined[i] = false;  // <= kMaxObservations
-  if (cfg.search == SearchMethod::kIcnn) {
-    SearchOutcome<T, B>& o = ws.outcome;
-    icnn_search(m, cfg.mutual_exclusion, ws.table, ws.jcbb, pred.count, o);
-    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-      ws.hyp[i] = o.best[i];
-      if (!decline || o.best[i] < 0) continue;
-      // Ambiguous: another compatible candidate within the margin of the chosen one.
-      const CompatibilityTable<T, B>& t = ws.table;
-      T chosen = T(0);
-      for (int q = 0; q < t.count[i]; ++q)  // <= kMaxCandidates
-        if (t.cand[i][q] == o.best[i]) chosen = t.d2[i][q];
-      for (int q = 0; q < t.count[i]; ++q) {  // <= kMaxCandidates
-        const T gap = t.d2[i][q] > chosen ? t.d2[i][q] - chosen : chosen - t.d2[i][q];
-        if (t.cand[i][q] != o.best[i] && gap < cfg.ambiguity_margin) ws.declined[i] = true;
-      }
-    }
-    if (decline) pipeline_detail::apply_decline(m, ws, diag);
-    s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
-    if (s != Status::kOk) return s;
-  } else {
-    bool seeded = false;
-    if (cfg.seed) {
-      s = pipeline_detail::seed(obs, pred, cfg, ws, diag, seeded);
-      if (s != Status::kOk) return s;
-    }
-    if (seeded) {  // one search over the unseeded observations, extending the seed
-      for (int i = 0; i < m; ++i) ws.seed_label[i] = ws.seed[i] >= 0 ? 1 : 0;  // <= kMaxObservations
-      diag.seed_used = true;
-      diag.groups = 1;
-      SearchOutcome<T, B>& o = ws.outcome;
-      s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0}, cfg.node_budget, ws.jcbb, o,
-                      &ws.seed);
-      if (s != Status::kOk) return s;
-      diag.jcbb_nodes = o.nodes;
-      diag.node_budget_hit = o.budget_hit;
-      for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-        ws.hyp[i] = ws.seed[i] >= 0 ? ws.seed[i] : o.best[i];
-        ws.declined[i] = ws.seed[i] < 0 && decline && o.ambiguous(i, cfg.ambiguity_margin);
-      }
-      joint_d2 = o.joint_d2;
-      if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
-        s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
-        if (s != Status::kOk) return s;
-      }
-    } else if (cfg.rjc && pipeline_detail::compatible_observations(m, ws.table) > cfg.rjc_subset) {
-      RjcStats st;
-      s = rjc_search(obs, pred, cfg, ws.table, cfg.node_budget, cfg.rjc_tries, cfg.rjc_subset, cfg.rjc_seed, ws.jcbb,
-                     ws.outcome, ws.rjc, ws.hyp, joint_d2, st);
-      if (s != Status::kOk) return s;
-      diag.rjc_used = true;
-      diag.groups = 1;
-      diag.jcbb_nodes = st.nodes;
-      diag.node_budget_hit = st.budget_hit;
-    } else {
-      pipeline_detail::group(obs, cfg, ws, diag);
-      diag.groups = static_cast<std::uint8_t>(ws.groups.count);
-      NodeCount nodes_left = cfg.node_budget;
-      for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
-      for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
-        SearchOutcome<T, B>& o = ws.outcome;
-        s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left, ws.jcbb, o,
-                        cfg.condition_groups ? &ws.hyp : nullptr);
-        if (s != Status::kOk) return s;
-        nodes_left -= o.nodes;
-        diag.jcbb_nodes += o.nodes;
-        diag.node_budget_hit = diag.node_budget_hit || o.budget_hit;
-        for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-          if (ws.groups.label[i] != g) continue;
-          ws.hyp[i] = o.best[i];
-          ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
-        }
-        joint_d2 = o.joint_d2;
-      }
-      // Conditioned groups: the last search's D2 covers the whole union. Independent groups: the union's
-      // D2 is computed by the merge.
-      if (ws.groups.count != 1 && !cfg.condition_groups) joint_d2 = T(-1);
-      MergeStats ms;
-      s = merge_groups(obs, pred, cfg, ws.table, nodes_left, ws.merge, ws.jcbb, ws.hyp, joint_d2, ms);
-      if (s != Status::kOk) return s;
-      diag.merge_conflicts = ms.conflicts;
-      diag.recheck_failed = ms.recheck_failed;
-      diag.recheck_dropped = ms.repair_dropped;
-      diag.jcbb_nodes += ms.repair_nodes;
-      diag.node_budget_hit = diag.node_budget_hit || ms.repair_budget_hit;
-      if (decline && pipeline_detail::apply_decline(m, ws, diag)) {
-        s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
-        if (s != Status::kOk) return s;
-      }
-    }
-  }
 
+  T joint_d2 = T(-1);  // < 0: the hypothesis's D2 is not known
+  s = pipeline_detail::search(obs, pred, cfg, ws, diag, joint_d2);
+  if (s != Status::kOk) return s;
+  bool changed = cfg.ambiguity_margin > T(0) && pipeline_detail::apply_decline(m, ws, diag);
   if (cfg.verify) {
     int dropped = 0;
     s = pipeline_detail::verify(obs, pred, cfg, ws, diag, dropped);
     if (s != Status::kOk) return s;
-    if (dropped > 0) {
-      s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
-      if (s != Status::kOk) return s;
-    }
+    changed = changed || dropped > 0;
+  }
+  if (changed || joint_d2 < T(0)) {
+    s = hypothesis_joint_d2(obs, pred, ws.hyp, ws.jcbb.joint, joint_d2);
+    if (s != Status::kOk) return s;
   }
 
   // With mutual exclusion a feature explains one observation: an unpaired observation whose every
