@@ -33,8 +33,8 @@ extern "C" {
  * the buffer given is large and aligned enough. Declare storage as, for example:
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
-#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28384
-#define GEOJCBB_SLAM_STORAGE_SIZE 120032
+#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28752
+#define GEOJCBB_SLAM_STORAGE_SIZE 120128
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */
@@ -121,8 +121,10 @@ typedef struct geojcbb_association {
 typedef struct geojcbb_associator geojcbb_associator; /* opaque: lives in the caller's storage */
 
 /* Places an associator configured with settings->strategy and the settings' association options
- * in `storage` (size bytes, GEOJCBB_STORAGE_ALIGN aligned). @return OK; INVALID_INPUT for null pointers, a small or misaligned buffer, or bad
- * parameters; the statuses of make_strategy. *out is set only on OK. */
+ * in `storage` (size bytes, GEOJCBB_STORAGE_ALIGN aligned).
+ * @return OK; INVALID_INPUT for null pointers, a small or misaligned buffer, or bad parameters; the
+ * statuses of make_strategy. *out is set only on OK (a refused configuration leaves the storage
+ * holding no usable associator). */
 geojcbb_status geojcbb_associator_init(void* storage, size_t size, const geojcbb_settings* settings,
                                        geojcbb_associator** out);
 

@@ -57,6 +57,7 @@ struct Associator {
   PredictionF pred;
   AssociationWorkspaceF ws;
   AssociationF out;
+  StepSettings<float> settings;  ///< the C settings, converted (init's scratch)
 };
 
 struct Slam {
@@ -145,11 +146,15 @@ geojcbb_status geojcbb_associator_init(void* storage, size_t size, const geojcbb
       !strategy_ok(static_cast<int>(settings->strategy))) {
     return GEOJCBB_INVALID_INPUT;
   }
-  AssociationConfigF cfg;
-  const Status s = make_strategy(static_cast<Strategy>(settings->strategy), c_boundary::from_c(*settings), cfg);
-  if (s != Status::kOk) return c_status(s);
+  // Built in the storage, not on the stack: a local AssociationConfig (it holds the settings) took
+  // this frame to 648 B on the Cortex-M4F (limit 512). Refused settings leave an unusable object.
   Associator* a = new (storage) Associator();
-  a->cfg = cfg;
+  a->settings = c_boundary::from_c(*settings);
+  const Status s = make_strategy(static_cast<Strategy>(settings->strategy), a->settings, a->cfg);
+  if (s != Status::kOk) {
+    a->magic = 0;
+    return c_status(s);
+  }
   *out = reinterpret_cast<geojcbb_associator*>(a);
   return GEOJCBB_OK;
 }

@@ -1,9 +1,9 @@
 // Benchmark suite "strategies": the six strategies (and GEOJCBB with the papers' merge, without our
 // joint re-check) on the same generated scenes, from sparse to dense maps, M = 10 .. 32. Per
 // strategy: median / p90 / max microseconds per scan, JCBB nodes, precision, recall and F1 against
-// ground truth, the share of answers failing the joint test, and ratios to plain JCBB in the same run.
-// The packed-covariance round's baseline in the same run: JCBB and GEOJCBB as before it (all of C checked before the
-// stages; EM stopped by the papers' objective tolerance only).
+// ground truth, the share of answers failing the joint test, and ratios to plain JCBB in the same
+// run. The packed-covariance round's baseline in the same run: JCBB and GEOJCBB as before it (all
+// of C checked before the stages; EM stopped by the papers' objective tolerance only).
 // Maps extend beyond the sensor's range (as a SLAM map does), which is what the local region prunes.
 #include <cstdio>
 #include <fstream>
@@ -74,7 +74,8 @@ int run_strategy_suite(const BenchOptions& o) {
   ungrouped.cfg.mutual_exclusion = true;
   ungrouped.cfg.optimal_criterion = true;
   variants.push_back(ungrouped);
-  // The packed-covariance round's baseline: the behaviour before it (full check of C up front; the papers' EM stop).
+  // The packed-covariance round's baseline: the behaviour before it (full check of C up front; the
+  // papers' EM stop).
   sp.condition_groups = false;
   sp.full_covariance_check = true;
   sp.papers_em = true;
@@ -94,7 +95,7 @@ int run_strategy_suite(const BenchOptions& o) {
       "K = %d groups (k-means, GMM-EM), DBSCAN eps %.1f m / min points %d; node budget %d per scan; "
       "double\n",
       o.scenes, static_cast<unsigned long long>(o.seed), o.confidence, kSensorRange, kSensorRange + kCompensation,
-      sp.groups, sp.dbscan_eps_m, sp.dbscan_min_points, variants[kJcbb].cfg.node_budget);
+      sp.groups, sp.dbscan_eps_m, sp.dbscan_min_points, variants[kJcbb].cfg.search_nodes());
   std::printf("speed-up and dF1 are against plain JCBB on the same scenes in the same run\n\n");
   std::printf(
       "maps: sparse N = 120 within R = 20 m, medium 180 within 16 m, dense 500 within 18 m; pose error "

@@ -1,7 +1,8 @@
-// The smoke session of the Cortex-M4F firmware (firmware_lib/port/mps2_an386/smoke_session.hex): the
-// cross build's QEMU test feeds these bytes to the firmware's UART and checks its replies (with
-// geojcbb_uart_check, host_tools/wire). This test keeps the file current (it changes with the protocol's schema) and checks
-// that a float node at the firmware's small bounds answers the session as the file says.
+// The smoke session of the Cortex-M4F firmware (firmware_lib/port/mps2_an386/smoke_session.hex):
+// the cross build's QEMU test feeds these bytes to the firmware's UART and checks its replies (with
+// geojcbb_uart_check, host_tools/wire). This test keeps the file current (it changes with the
+// protocol's schema) and checks that a float node at the firmware's small bounds answers the
+// session as the file says.
 // To rewrite the file: GEOJCBB_UPDATE_MPS2_SESSION=1 ./unit_tests -tc='mps2*'
 #include <doctest/doctest.h>
 

@@ -1,6 +1,7 @@
 // The association pipeline: the only file that knows the order of the stages.
 //   validate -> local region + individual gate
-//   -> seed (when the pose is uncertain: the pose-free max clique, tested jointly; the pose-free consistency round)
+//   -> seed (when the pose is uncertain: the pose-free max clique, tested jointly; the pose-free
+//      consistency round)
 //   -> group (none | k-means | DBSCAN | GMM-EM; skipped when seeded)
 //   -> search per group (ICNN | JCBB, one node budget shared by the groups; extends the seed;
 //      RJC instead of JCBB for a large ungrouped scan when asked)
@@ -10,8 +11,9 @@
 //      pose-free consistency round)
 //   -> the answer's joint D2 (computed once, unless the search knows it and nothing changed it)
 //   -> result
-// No heap: all working memory is the caller's AssociationWorkspace; outputs are written only on kOk, at the end,
-// so a stage may check what it reads (C's cross blocks, the packed-covariance round) and still leave them untouched.
+// No heap: all working memory is the caller's AssociationWorkspace; outputs are written only on
+// kOk, at the end, so a stage may check what it reads (C's cross blocks, the packed-covariance
+// round) and still leave them untouched.
 #pragma once
 
 #include "geojcbb/cluster/group.hpp"
@@ -55,7 +57,7 @@ namespace pipeline_detail {
 template <typename T, class B>
 void group(const Observations<T, B>& obs, const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
            AssociationDiagnostics& diag) {
-  const GroupingStats st = group_observations(obs, grouping_options(cfg), ws.grouping, ws.groups);
+  const GroupingStats st = group_observations(obs, cfg, ws.grouping, ws.groups);
   diag.cluster_iterations = static_cast<std::uint16_t>(st.iterations);
   diag.cluster_bound_hit = st.bound_hit;
 }
@@ -153,12 +155,16 @@ template <typename T, class B>
 /// observations, marked only when an ambiguity margin is set) and in `joint_d2` the hypothesis's D2
 /// when the search knows it, -1 otherwise.
 /// @return kOk; kNotPositiveDefinite (C not PSD) from a joint test.
+/// Inlined into associate(): as a frame of its own it took the seed's call chain over the
+/// association's 1 KiB budget on the Cortex-M4F.
 template <typename T, class B>
-[[nodiscard]] Status search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                            const AssociationConfig<T, B>& cfg, AssociationWorkspace<T, B>& ws,
-                            AssociationDiagnostics& diag, T& joint_d2) {
+[[nodiscard, gnu::always_inline]] inline Status search(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                                       const AssociationConfig<T, B>& cfg,
+                                                       AssociationWorkspace<T, B>& ws, AssociationDiagnostics& diag,
+                                                       T& joint_d2) {
   const int m = obs.count;
-  const bool decline = cfg.ambiguity_margin > T(0);
+  const T margin = cfg.margin();
+  const bool decline = margin > T(0);
   joint_d2 = T(-1);
   SearchOutcome<T, B>& o = ws.outcome;
   if (cfg.search == SearchMethod::kIcnn) {
@@ -173,7 +179,7 @@ template <typename T, class B>
         if (t.cand[i][q] == o.best[i]) chosen = t.d2[i][q];
       for (int q = 0; q < t.count[i]; ++q) {  // <= kMaxCandidates
         const T gap = t.d2[i][q] > chosen ? t.d2[i][q] - chosen : chosen - t.d2[i][q];
-        if (t.cand[i][q] != o.best[i] && gap < cfg.ambiguity_margin) ws.declined[i] = true;
+        if (t.cand[i][q] != o.best[i] && gap < margin) ws.declined[i] = true;
       }
     }
     return Status::kOk;
@@ -187,22 +193,22 @@ template <typename T, class B>
     for (int i = 0; i < m; ++i) ws.seed_label[i] = ws.seed[i] >= 0 ? 1 : 0;  // <= kMaxObservations
     diag.seed_used = true;
     diag.groups = 1;
-    const Status s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0}, cfg.node_budget,
-                                 ws.jcbb, o, &ws.seed);
+    const Status s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.seed_label.data(), 0},
+                                 cfg.search_nodes(), ws.jcbb, o, &ws.seed);
     if (s != Status::kOk) return s;
     diag.jcbb_nodes = o.nodes;
     diag.node_budget_hit = o.budget_hit;
     for (int i = 0; i < m; ++i) {  // <= kMaxObservations
       ws.hyp[i] = ws.seed[i] >= 0 ? ws.seed[i] : o.best[i];
-      ws.declined[i] = ws.seed[i] < 0 && decline && o.ambiguous(i, cfg.ambiguity_margin);
+      ws.declined[i] = ws.seed[i] < 0 && decline && o.ambiguous(i, margin);
     }
     joint_d2 = o.joint_d2;
     return Status::kOk;
   }
   if (cfg.rjc && compatible_observations(m, ws.table) > cfg.rjc_subset) {
     RjcStats st;
-    const Status s = rjc_search(obs, pred, cfg, ws.table, cfg.node_budget, cfg.rjc_tries, cfg.rjc_subset, cfg.rjc_seed,
-                                ws.jcbb, o, ws.rjc, ws.hyp, joint_d2, st);
+    const Status s = rjc_search(obs, pred, cfg, ws.table, cfg.search_nodes(), cfg.rjc_tries, cfg.rjc_subset,
+                                cfg.rjc_seed, ws.jcbb, o, ws.rjc, ws.hyp, joint_d2, st);
     if (s != Status::kOk) return s;
     diag.rjc_used = true;
     diag.groups = 1;
@@ -212,7 +218,7 @@ template <typename T, class B>
   }
   group(obs, cfg, ws, diag);
   diag.groups = static_cast<std::uint8_t>(ws.groups.count);
-  NodeCount nodes_left = cfg.node_budget;
+  NodeCount nodes_left = cfg.search_nodes();
   for (int i = 0; i < m; ++i) ws.hyp[i] = -1;  // <= kMaxObservations
   for (int g = 0; g < ws.groups.count; ++g) {  // <= kMaxGroups
     const Status s = jcbb_search(obs, pred, cfg, ws.table, ObservationSubset{ws.groups.label.data(), g}, nodes_left,
@@ -224,7 +230,7 @@ template <typename T, class B>
     for (int i = 0; i < m; ++i) {  // <= kMaxObservations
       if (ws.groups.label[i] != g) continue;
       ws.hyp[i] = o.best[i];
-      ws.declined[i] = decline && o.ambiguous(i, cfg.ambiguity_margin);
+      ws.declined[i] = decline && o.ambiguous(i, margin);
     }
     joint_d2 = o.joint_d2;
   }
@@ -271,7 +277,7 @@ template <typename T, class B>
   T joint_d2 = T(-1);  // < 0: the hypothesis's D2 is not known
   s = pipeline_detail::search(obs, pred, cfg, ws, diag, joint_d2);
   if (s != Status::kOk) return s;
-  bool changed = cfg.ambiguity_margin > T(0) && pipeline_detail::apply_decline(m, ws, diag);
+  bool changed = cfg.margin() > T(0) && pipeline_detail::apply_decline(m, ws, diag);
   if (cfg.verify) {
     int dropped = 0;
     s = pipeline_detail::verify(obs, pred, cfg, ws, diag, dropped);

@@ -178,10 +178,10 @@ bool same_groups(const Groups<B>& a, const Groups<B>& b, int m) {
 }
 }  // namespace
 
-// The packed-covariance round: the default start (k-means) and stop (an E-step leaves the groups unchanged) return the
-// groups of the start and stop before it (farthest-first seeds, objective tolerance) on mixtures whose
-// groups are clear, in fewer iterations; with a hardness margin, where the groups are not clear
-// (soft responsibilities) the stop is the papers' rule.
+// The packed-covariance round: the default start (k-means) and stop (an E-step leaves the groups
+// unchanged) return the groups of the start and stop before it (farthest-first seeds, objective
+// tolerance) on mixtures whose groups are clear, in fewer iterations; with a hardness margin, where
+// the groups are not clear (soft responsibilities) the stop is the papers' rule.
 TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' groups, sooner", T, float, double) {
   std::mt19937_64 rng(29);
   const Eigen::Matrix2d s = Eigen::Matrix2d::Identity() * 0.09;
@@ -228,8 +228,9 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
   CHECK(same_groups(g_papers, g_hard, m));
 }
 
-// The packed-covariance round: EM and its BIC run in the Scalar (float on the controller; the BIC was double). Float and
-// double fits of the same points find the same groups and the same K where the data decide them.
+// The packed-covariance round: EM and its BIC run in the Scalar (float on the controller; the BIC
+// was double). Float and double fits of the same points find the same groups and the same K where
+// the data decide them.
 TEST_CASE("EM in float finds the groups and the K of EM in double") {
   std::mt19937_64 rng(31);
   const Eigen::Matrix2d s = Eigen::Matrix2d::Identity() * 0.09;

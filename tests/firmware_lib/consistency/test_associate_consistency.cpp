@@ -1,8 +1,8 @@
-// The consistency stage inside associate() (the pose-free consistency round): verify drops the pairings of JCBB's answer
-// that are not pairwise consistent (a constructed loop closure where JCBB alone takes a wrong
-// hypothesis); seed uses the pose-free clique when the pose is uncertain (a constructed
-// relocalisation) and is not tried otherwise; the PCJCBB preset; bad options give a status and
-// leave the output untouched.
+// The consistency stage inside associate() (the pose-free consistency round): verify drops the
+// pairings of JCBB's answer that are not pairwise consistent (a constructed loop closure where JCBB
+// alone takes a wrong hypothesis); seed uses the pose-free clique when the pose is uncertain (a
+// constructed relocalisation) and is not tried otherwise; the PCJCBB preset; bad options give a
+// status and leave the output untouched.
 #include <doctest/doctest.h>
 
 #include <limits>

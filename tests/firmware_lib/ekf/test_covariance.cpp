@@ -1,6 +1,7 @@
-// EKF covariance engine (the packed-covariance round): the packed covariance against a dense reference on random states.
-// Every operation starts from the filter's own state (x, and P read through cov()), the reference
-// applies the textbook dense formula in double, and the filter's result must match it:
+// EKF covariance engine (the packed-covariance round): the packed covariance against a dense
+// reference on random states. Every operation starts from the filter's own state (x, and P read
+// through cov()), the reference applies the textbook dense formula in double, and the filter's
+// result must match it:
 //   predict  P <- F P F^T + G Q G^T (F the identity outside the pose rows)
 //   update   one batch: S = H P H^T + R, K = P H^T S^-1, x <- x + K nu, P <- P - K S K^T
 //   augment  [P, P Jp^T; Jp P, Jp P_rr Jp^T + Jz R Jz^T] (Jp on the pose columns)

@@ -49,8 +49,8 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
     const char* name;
     Status want;
     std::function<void(Problem<T, B>&, AssociationConfig<T, B>&)> corrupt;
-    /// With C checked where read (the packed-covariance round), when it differs from `want`: kOk for an entry no test
-    /// of this scene reads, whose answer must then be the clean input's.
+    /// With C checked where read (the packed-covariance round), when it differs from `want`: kOk
+    /// for an entry no test of this scene reads, whose answer must then be the clean input's.
     bool unread_where_read = false;
   };
   const Case cases[] = {
@@ -65,9 +65,10 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"R not positive definite", Status::kNotPositiveDefinite,
        [&](auto& p, auto&) { p.obs.R[4] << T(0.01), T(0.02), T(0.02), T(0.01); }},
       {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
-      // A cross block cannot be asymmetric in the packed C (the packed-covariance round): that is checked where a dense C
-      // comes in (the test "a dense C's asymmetric cross block is refused where it comes in" below).
-      // A diagonal block is stored whole and is still validate()'s to check, in both modes.
+      // A cross block cannot be asymmetric in the packed C (the packed-covariance round): that is
+      // checked where a dense C comes in (the test "a dense C's asymmetric cross block is refused
+      // where it comes in" below). A diagonal block is stored whole and is still validate()'s to
+      // check, in both modes.
       {"C diagonal block not symmetric", Status::kNotSymmetric, [&](auto& p, auto&) { p.pred.C(5, 4) += T(0.5); }},
       {"C block indefinite", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.pred.C(2, 2) = T(-1); }},
       {"C wrong size", Status::kInvalidInput,
@@ -78,7 +79,6 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
        [&](auto& p, auto&) { p.pred.count = B::kMaxCandidates + 1; }},
       {"negative count", Status::kInvalidInput, [&](auto& p, auto&) { p.obs.count = -1; }},
       {"negative feature id", Status::kInvalidInput, [&](auto& p, auto&) { p.pred.id[1] = -3; }},
-      {"node budget 0", Status::kInvalidInput, [&](auto&, auto& c) { c.node_budget = 0; }},
       {"node budget over capacity", Status::kInvalidInput,
        [&](auto&, auto& c) { c.node_budget = B::kMaxJcbbNodes + 1; }},
       {"thresholds not set", Status::kInvalidInput,
@@ -185,9 +185,10 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   cfg.local_region = true;
   p->pred.C(3, 0) = std::numeric_limits<T>::quiet_NaN();  // cross term between two candidates inside
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
-  // The check where read (the default, the packed-covariance round): diagonal blocks in the region at gating, cross
-  // blocks when a joint test reads them. One observation: no joint test holds two candidates, so the
-  // NaN cross term C(3, 0) inside the region is never read and cannot change the answer.
+  // The check where read (the default, the packed-covariance round): diagonal blocks in the region
+  // at gating, cross blocks when a joint test reads them. One observation: no joint test holds two
+  // candidates, so the NaN cross term C(3, 0) inside the region is never read and cannot change the
+  // answer.
   cfg.covariance_check = CovarianceCheck::kWhereRead;
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
   CHECK(p->out.feature[0] == 0);
@@ -200,10 +201,10 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
 }
 
-// The packed-covariance round: C's cross blocks are checked where a joint (or pairwise) test reads them. A bad entry a
-// test reads gets the same status as the full check's, output untouched; one that no test reads
-// leaves the answer exactly as on the clean input. The full check (CovarianceCheck::kFull) still
-// rejects both.
+// The packed-covariance round: C's cross blocks are checked where a joint (or pairwise) test reads
+// them. A bad entry a test reads gets the same status as the full check's, output untouched; one
+// that no test reads leaves the answer exactly as on the clean input. The full check
+// (CovarianceCheck::kFull) still rejects both.
 TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads them", T, float, double) {
   using B = DefaultBounds;
   const T nan = std::numeric_limits<T>::quiet_NaN();
@@ -304,10 +305,11 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
   CHECK(refused_cases > 100);
 }
 
-// The packed-covariance round: the prediction holds C's lower block triangle, so an asymmetric cross block can only come
-// in through a dense C (the C API, the Python binding, BlockCovariance::assign_dense). It is refused
-// there with kNotSymmetric (within validate()'s tolerance it is accepted, the lower entry kept), and
-// the prediction is left as it was; a non-finite entry on either side is kept for the stages.
+// The packed-covariance round: the prediction holds C's lower block triangle, so an asymmetric
+// cross block can only come in through a dense C (the C API, the Python binding,
+// BlockCovariance::assign_dense). It is refused there with kNotSymmetric (within validate()'s
+// tolerance it is accepted, the lower entry kept), and the prediction is left as it was; a
+// non-finite entry on either side is kept for the stages.
 TEST_CASE_TEMPLATE("a dense C's asymmetric cross block is refused where it comes in", T, float, double) {
   using B = DefaultBounds;
   host::SceneParams sp;

@@ -65,6 +65,26 @@ TEST_CASE_TEMPLATE("with a budget that suffices, the answer equals the unbudgete
   }
 }
 
+TEST_CASE_TEMPLATE("node budget 0 is the capacity, as the option table says", T, float, double) {
+  using B = DefaultBounds;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const host::Scene scene = host::make_scene(dense_params(24, 32), seed);
+    auto p = make_problem<T, B>();
+    REQUIRE(host::to_inputs(scene, p->obs, p->pred));
+    auto cfg = make_config<T, B>(SearchMethod::kJcbb, true, true);
+    cfg.node_budget = B::kMaxJcbbNodes;
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    const auto capacity = p->out;
+    cfg.node_budget = 0;
+    CHECK(cfg.search_nodes() == static_cast<NodeCount>(B::kMaxJcbbNodes));
+    REQUIRE(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
+    CHECK(p->out.diag.jcbb_nodes == capacity.diag.jcbb_nodes);
+    CHECK(p->out.diag.node_budget_hit == capacity.diag.node_budget_hit);
+    CHECK(p->out.pairings == capacity.pairings);
+    CHECK(p->out.joint_d2 == capacity.joint_d2);
+  }
+}
+
 TEST_CASE_TEMPLATE("mutual exclusion: on, a feature takes one observation - off, two may share it", T, float, double) {
   using B = DefaultBounds;
   auto p = make_problem<T, B>();

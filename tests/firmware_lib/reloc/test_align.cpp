@@ -84,7 +84,7 @@ std::unique_ptr<Problem<T>> load(const World& w, const std::vector<Eigen::Vector
 
 /// The options with the test's sensor: 20 m, 180 degrees.
 template <typename T>
-AlignOptions<T> options() {
+AlignOptions<T> align_options() {
   AlignOptions<T> o;
   o.max_range_m = T(20);
   o.half_fov_rad = kPi<T> / 2;
@@ -139,7 +139,7 @@ TEST_CASE_TEMPLATE("reloc: the true pose is found on random maps whenever a base
     const World w = make_world(seed, 60, 2, 1.0);
     if (w.z.size() < 6) continue;
     auto p = load<T>(w, w.map);
-    const AlignOptions<T> opt = options<T>();
+    const AlignOptions<T> opt = align_options<T>();
     REQUIRE(align(p->obs, opt, p->ws, p->out) == Status::kOk);
     bool clean = false;
     for (int b = 0; b < opt.base_pairs; ++b) {
@@ -188,7 +188,7 @@ TEST_CASE_TEMPLATE("reloc: a mirrored constellation is not accepted", T, float, 
       mirrored.push_back(o + 2 * d.dot(h) * h - d);
     }
     auto p = load<T>(w, mirrored);
-    REQUIRE(align(p->obs, options<T>(), p->ws, p->out) == Status::kOk);
+    REQUIRE(align(p->obs, align_options<T>(), p->ws, p->out) == Status::kOk);
     CAPTURE(seed);
     CHECK(!p->out.accepted);
   }
@@ -200,7 +200,7 @@ TEST_CASE_TEMPLATE("reloc: a map with two copies of the scene has no unique pose
   std::vector<Eigen::Vector2d> twice = w.map;
   for (const auto& l : w.map) twice.push_back(l + Eigen::Vector2d(200, 0));
   auto p = load<T>(w, twice);
-  REQUIRE(align(p->obs, options<T>(), p->ws, p->out) == Status::kOk);
+  REQUIRE(align(p->obs, align_options<T>(), p->ws, p->out) == Status::kOk);
   CHECK(!p->out.accepted);
   CHECK(p->out.inliers == p->out.rival_inliers);
 }
@@ -218,7 +218,7 @@ TEST_CASE("reloc: the fit's covariance is the spread of its answers over noise d
     World w = base;
     for (auto& z : w.z) z += Eigen::Vector2d(kSigmaR * g(rng), kSigmaB * g(rng));
     auto p = load<double>(w, w.map, 1e-3);
-    REQUIRE(align(p->obs, options<double>(), p->ws, p->out) == Status::kOk);
+    REQUIRE(align(p->obs, align_options<double>(), p->ws, p->out) == Status::kOk);
     REQUIRE(p->out.accepted);
     const Eigen::Vector3d e(p->out.pose.x - w.pose.x, p->out.pose.y - w.pose.y,
                             wrap_angle(p->out.pose.theta - w.pose.theta));
@@ -237,11 +237,11 @@ TEST_CASE_TEMPLATE("reloc: bad input is a Status and the output is untouched", T
   AlignOptions<T> bad;
   bad.base_pairs = kMaxBasePairs + 1;
   CHECK(align(p->obs, bad, p->ws, p->out) == Status::kInvalidInput);
-  bad = options<T>();
+  bad = align_options<T>();
   bad.min_inliers = 2;
   CHECK(align(p->obs, bad, p->ws, p->out) == Status::kInvalidInput);
   p->obs.z[0].x() = std::numeric_limits<T>::quiet_NaN();
-  CHECK(align(p->obs, options<T>(), p->ws, p->out) == Status::kNonFinite);
+  CHECK(align(p->obs, align_options<T>(), p->ws, p->out) == Status::kNonFinite);
   CHECK(p->out.inliers == 77);
   // The map's own checks.
   CHECK(p->ws.push_landmark(Vec2<T>(std::numeric_limits<T>::infinity(), 0), Mat2<T>::Identity()) == Status::kNonFinite);
@@ -256,7 +256,7 @@ TEST_CASE_TEMPLATE("reloc: align allocates nothing", T, float, double) {
   const World w = make_world(2, 96, 3, 1.0);
   auto p = load<T>(w, w.map);
   Status s = Status::kNoConvergence;
-  CHECK(test::allocations_during([&] { s = align(p->obs, options<T>(), p->ws, p->out); }) == 0);
+  CHECK(test::allocations_during([&] { s = align(p->obs, align_options<T>(), p->ws, p->out); }) == 0);
   CHECK(s == Status::kOk);
 }
 
@@ -266,8 +266,8 @@ TEST_CASE("reloc: float and double agree on a well-conditioned scene") {
     if (w.z.size() < 6) continue;
     auto pf = load<float>(w, w.map);
     auto pd = load<double>(w, w.map);
-    REQUIRE(align(pf->obs, options<float>(), pf->ws, pf->out) == Status::kOk);
-    REQUIRE(align(pd->obs, options<double>(), pd->ws, pd->out) == Status::kOk);
+    REQUIRE(align(pf->obs, align_options<float>(), pf->ws, pf->out) == Status::kOk);
+    REQUIRE(align(pd->obs, align_options<double>(), pd->ws, pd->out) == Status::kOk);
     CAPTURE(seed);
     REQUIRE(pf->out.accepted == pd->out.accepted);
     if (!pd->out.accepted) continue;

@@ -1,6 +1,7 @@
 // cluster: the grouping stage (ARCHITECTURE.md step 3b): the observations' points, split by the
-// method GroupingOptions names (none | k-means | DBSCAN | GMM-EM). Input: the observations and the
-// stage's own options (core/grouping_options.hpp). Output: a group label per observation.
+// method the configuration names (none | k-means | DBSCAN | GMM-EM). Input: the observations and the
+// association's configuration (it reads grouping, groups, kmeans_max_iterations, dbscan_eps_m,
+// dbscan_min_points and em). Output: a group label per observation.
 // Bounds: those of the chosen method (kmeans.hpp, dbscan.hpp, gmm_em.hpp).
 #pragma once
 
@@ -10,7 +11,7 @@
 #include "geojcbb/cluster/gmm_em.hpp"
 #include "geojcbb/cluster/groups.hpp"
 #include "geojcbb/cluster/kmeans.hpp"
-#include "geojcbb/core/grouping_options.hpp"
+#include "geojcbb/core/association_config.hpp"
 
 namespace geojcbb {
 
@@ -28,7 +29,7 @@ struct GroupingStats {
 
 /// Splits the observations into groups (one group without grouping; none for no observations).
 template <typename T, class B>
-GroupingStats group_observations(const Observations<T, B>& obs, const GroupingOptions<T>& opt,
+GroupingStats group_observations(const Observations<T, B>& obs, const AssociationConfig<T, B>& opt,
                                  GroupingWorkspace<T, B>& ws, Groups<B>& g) {
   GroupingStats st;
   const int m = obs.count;

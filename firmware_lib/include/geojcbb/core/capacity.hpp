@@ -36,8 +36,9 @@ struct Bounds {
 /// Controller-class default: 24 observations per scan, 32 candidates in the local region, 5 groups,
 /// 4000 JCBB nodes per scan, 96 landmarks in the map. The float device loop at these bounds
 /// (node::Node, all memory static) needs about 119 KB of RAM and fits, with a 4 KiB stack, in
-/// 128 KiB (the packed-covariance round: packed covariance P, packed C in the Prediction, O(n) update scratch; the
-/// covariance still grows as (3 + 2N)(4 + 2N)/2 floats, and at most 100 landmarks fit).
+/// 128 KiB (the packed-covariance round: packed covariance P, packed C in the Prediction, O(n)
+/// update scratch; the covariance still grows as (3 + 2N)(4 + 2N)/2 floats, and at most 100
+/// landmarks fit).
 /// See docs/firmware.md, "Configurations".
 using DefaultBounds = Bounds<24, 32, 5, 4000, 96>;
 

@@ -23,11 +23,12 @@ constexpr int kMaxEmIterations = 50;
 enum class EmStop : std::uint8_t {
   /// The papers' rule: when the objective Q gains less than tolerance * (1 + |Q|), or at the bound.
   kObjective,
-  /// The packed-covariance round: also when the groups (arg max responsibilities, eq. 9) came out the same from
-  /// stable_iterations consecutive iterations (and, with hard_margin < 1, every point's largest
-  /// responsibility is at least 1 - hard_margin): EM's remaining iterations then mostly refine the
-  /// components' parameters, not the groups this stage returns. Not a proof that the groups cannot
-  /// change later; measured against kObjective on the evaluation's seeds (docs/algorithms.md).
+  /// The packed-covariance round: also when the groups (arg max responsibilities, eq. 9) came out
+  /// the same from stable_iterations consecutive iterations (and, with hard_margin < 1, every
+  /// point's largest responsibility is at least 1 - hard_margin): EM's remaining iterations then
+  /// mostly refine the components' parameters, not the groups this stage returns. Not a proof that
+  /// the groups cannot change later; measured against kObjective on the evaluation's seeds
+  /// (docs/algorithms.md).
   kGroupsStable,
 };
 
@@ -36,8 +37,8 @@ enum class EmStart : std::uint8_t {
   /// Hard responsibilities to the nearest farthest-first seed (cluster/groups.hpp), the start
   /// before the packed-covariance round.
   kFarthestFirst,
-  /// The packed-covariance round: hard responsibilities from k-means (Lloyd's iterations from the same seeds, no exp
-  /// or log; the usual EM initialisation): EM starts next to its fixed point.
+  /// The packed-covariance round: hard responsibilities from k-means (Lloyd's iterations from the
+  /// same seeds, no exp or log; the usual EM initialisation): EM starts next to its fixed point.
   kKMeans,
 };
 
@@ -50,17 +51,6 @@ struct EmOptions {
   EmStart start = EmStart::kKMeans;
   int stable_iterations = 1;  ///< kGroupsStable: iterations with unchanged groups, 1 .. kMaxEmIterations
   T hard_margin = T(1);       ///< kGroupsStable: 0 .. 1 (1: no hardness required)
-};
-
-/// The grouping stage's options (what cluster/group.hpp reads of an AssociationConfig).
-template <typename T>
-struct GroupingOptions {
-  Grouping grouping = Grouping::kNone;
-  int groups = 3;  ///< k-means and GMM-EM: 1 .. MaxGroups; GMM-EM: 0 chooses K by BIC
-  int kmeans_max_iterations = kMaxKMeansIterations;
-  T dbscan_eps_m = T(1.5);
-  int dbscan_min_points = 2;
-  EmOptions<T> em;
 };
 
 }  // namespace geojcbb

@@ -7,13 +7,13 @@
 //   GEMJCBB  yes           GMM-EM    no                no
 //   GEOJCBB  yes           GMM-EM    yes               yes
 //   PCJCBB   no            none      yes               yes   + verify + seed (ours)
-// A preset switches only the columns above (and PCJCBB's verify and seed); every other field of
-// AssociationConfig comes from the step's settings (core/settings.hpp, one line per option in
-// core/options.h). The joint re-check of merged hypotheses (our addition) is on by default in the
-// grouped presets; `joint_recheck` off reproduces the papers' methods exactly. PCJCBB ("pairwise
-// consistent JCBB") is not a paper's method: JCBB with exclusion and the optimal criterion, whose
-// answer is verified pairwise and which is seeded by the pose-free clique when the pose is
-// uncertain (docs/consistency.md). The verification can be switched into every other preset
+// A preset switches only the columns above (and PCJCBB's verify and seed); AssociationConfig holds
+// the step's settings themselves (core/settings.hpp, one line per option in core/options.h). The
+// joint re-check of merged hypotheses (our addition) is on by default in the grouped presets;
+// `joint_recheck` off reproduces the papers' methods exactly. PCJCBB ("pairwise consistent JCBB") is
+// not a paper's method: JCBB with exclusion and the optimal criterion, whose answer is verified
+// pairwise and which is seeded by the pose-free clique when the pose is uncertain
+// (docs/consistency.md). The verification can be switched into every other preset
 // (StepSettings::verify).
 #pragma once
 
@@ -22,8 +22,8 @@
 
 namespace geojcbb {
 
-/// Builds a strategy's configuration from the step's settings: the preset's switches, the rest from
-/// `p` (its strategy field is not read: `s` names the preset).
+/// Builds a strategy's configuration from the step's settings: `p` whole, then the preset's switches
+/// and the derived gates (`s` names the preset; out.strategy is set to it).
 /// @return kOk; kInvalidInput when an option is outside its range (core/options.h), over the Bounds'
 ///         capacity (groups, node budget, RJC subset), or a grouped-region strategy has no radius;
 ///         kNoConvergence from the chi-square quantiles. `out` is written only on kOk.
@@ -49,7 +49,10 @@ template <typename T, class B>
                 (p.node_budget != 0 && p.node_budget < static_cast<NodeCount>(p.rjc_tries)))) {
     return Status::kInvalidInput;
   }
-  // The preset's switches.
+  // The settings, whole (the stages read them where they use them), then the preset's switches and
+  // what is derived from the settings.
+  static_cast<StepSettings<T>&>(out) = p;
+  out.strategy = s;
   out.search = s == Strategy::kIcnn ? SearchMethod::kIcnn : SearchMethod::kJcbb;
   out.grouping = s == Strategy::kKjcbb    ? Grouping::kKMeans
                  : s == Strategy::kDfjcbb ? Grouping::kDbscan
@@ -60,32 +63,20 @@ template <typename T, class B>
   out.optimal_criterion = s == Strategy::kGeojcbb || s == Strategy::kPcjcbb;
   out.verify = p.verify || s == Strategy::kPcjcbb;
   out.seed = s == Strategy::kPcjcbb;
-  // The settings (fields no option reaches keep AssociationConfig's defaults, set one by one: a
-  // default-constructed temporary would cost the frame as much as a local copy).
-  out.kmeans_max_iterations = kMaxKMeansIterations;
+  // 0 groups (BIC) is GMM-EM's alone; k-means takes the default K.
+  if (p.groups == 0 && out.grouping != Grouping::kGmmEm) out.groups = StepSettings<T>{}.groups;
+  out.gate = gate;
   out.em = EmOptions<T>{};
   out.em.stop = p.papers_em ? EmStop::kObjective : EmStop::kGroupsStable;
   out.em.start = p.papers_em ? EmStart::kFarthestFirst : EmStart::kKMeans;
   out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
-  out.order_fewest_candidates_first = true;
-  out.seed_min_pairings = 3;
-  out.rjc = p.rjc;
-  out.rjc_tries = p.rjc_tries;
-  out.rjc_subset = p.rjc_subset;
-  out.rjc_seed = 1;
-  out.gate = gate;
   out.consistency = consistency;
-  out.local_radius_m = p.local_radius_m;
-  out.seed_min_position_var_m2 = p.seed_min_position_var_m2;
-  // 0 (BIC) is GMM-EM's alone; k-means takes the default K.
-  out.groups = p.groups == 0 && out.grouping != Grouping::kGmmEm ? StepSettings<T>{}.groups : p.groups;
-  out.dbscan_eps_m = p.dbscan_eps_m;
-  out.dbscan_min_points = p.dbscan_min_points;
-  out.joint_recheck = p.joint_recheck;
-  out.condition_groups = p.condition_groups;
-  out.node_budget = p.node_budget == 0 ? B::kMaxJcbbNodes : p.node_budget;
-  out.ambiguity_margin = static_cast<T>(p.ambiguity_margin);
-  out.new_if_candidates_taken = p.new_if_candidates_taken;
+  // Stage constants, set one by one: a default-constructed temporary would cost the frame as much as
+  // a local copy.
+  out.kmeans_max_iterations = kMaxKMeansIterations;
+  out.seed_min_pairings = 3;
+  out.rjc_seed = 1;
+  out.order_fewest_candidates_first = true;
   return Status::kOk;
 }
 

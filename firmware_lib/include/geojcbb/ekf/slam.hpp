@@ -124,9 +124,9 @@ class Slam {
     return Status::kOk;
   }
 
-  /// Relocalisation (the pose-free consistency round): the robot was carried somewhere unknown. The pose estimate becomes
-  /// x with covariance Pxx and its correlation with the map is removed (the map no longer says
-  /// anything about where the robot is); the map and its covariance are kept.
+  /// Relocalisation (the pose-free consistency round): the robot was carried somewhere unknown. The
+  /// pose estimate becomes x with covariance Pxx and its correlation with the map is removed (the
+  /// map no longer says anything about where the robot is); the map and its covariance are kept.
   /// @return as reset(); nothing changes unless kOk.
   [[nodiscard]] Status relocalise(const Pose2<T>& x, const Mat3<T>& Pxx) {
     const Status s = check_pose_prior(x, Pxx);

@@ -3,12 +3,13 @@
 // |bearing| <= pi, R_i symmetric positive definite, C's 2x2 diagonal blocks symmetric and positive
 // semidefinite. C is checked on the candidates inside the local region only (all when the region is
 // off): the call reads nothing else, and the region exists to make a large map cheap.
-// C's cross blocks (the packed-covariance round): with CovarianceCheck::kWhereRead (the default) they are checked where
-// a stage reads them (IncrementalJoint::try_push, pair_statistic), with the same statuses; with
-// kFull, here, every pair of candidates in the region. The Prediction holds C's lower block triangle
-// (BlockCovariance), so a cross block is symmetric by storage: kNotSymmetric here is a diagonal
-// block's; a dense C's asymmetric cross block is refused where it comes in (assign_dense). C's off-diagonal definiteness is checked
-// where it is used: a non-positive Cholesky pivot in the joint test.
+// C's cross blocks (the packed-covariance round): with CovarianceCheck::kWhereRead (the default)
+// they are checked where a stage reads them (IncrementalJoint::try_push, pair_statistic), with the
+// same statuses; with kFull, here, every pair of candidates in the region. The Prediction holds C's
+// lower block triangle (BlockCovariance), so a cross block is symmetric by storage: kNotSymmetric
+// here is a diagonal block's; a dense C's asymmetric cross block is refused where it comes in
+// (assign_dense). C's off-diagonal definiteness is checked where it is used: a non-positive
+// Cholesky pivot in the joint test.
 // Bounds: O(n) over h and C's diagonal blocks (kFull: O(n_region^2) over C), O(m) over observations.
 #pragma once
 
@@ -31,7 +32,7 @@ template <typename T, class B>
   if (pred.C.rows() != 2 * pred.count || pred.C.cols() != 2 * pred.count) {
     return Status::kInvalidInput;
   }
-  if (cfg.node_budget == 0 || cfg.node_budget > B::kMaxJcbbNodes || !cfg.gate.valid()) {
+  if (cfg.node_budget > B::kMaxJcbbNodes || !cfg.gate.valid()) {
     return Status::kInvalidInput;
   }
   if (cfg.local_region && !(std::isfinite(cfg.local_radius_m) && cfg.local_radius_m > T(0))) {
@@ -54,10 +55,10 @@ template <typename T, class B>
                    cfg.seed_min_pairings < 2 || cfg.search != SearchMethod::kJcbb)) {
     return Status::kInvalidInput;
   }
-  if (cfg.rjc &&
-      (cfg.rjc_tries < 1 || cfg.rjc_tries > kMaxRjcTries || cfg.node_budget < static_cast<NodeCount>(cfg.rjc_tries) ||
-       cfg.rjc_subset < 1 || cfg.rjc_subset > B::kMaxObservations || cfg.search != SearchMethod::kJcbb ||
-       cfg.grouping != Grouping::kNone || cfg.ambiguity_margin > T(0))) {
+  if (cfg.rjc && (cfg.rjc_tries < 1 || cfg.rjc_tries > kMaxRjcTries ||
+                  cfg.search_nodes() < static_cast<NodeCount>(cfg.rjc_tries) || cfg.rjc_subset < 1 ||
+                  cfg.rjc_subset > B::kMaxObservations || cfg.search != SearchMethod::kJcbb ||
+                  cfg.grouping != Grouping::kNone || cfg.margin() > T(0))) {
     return Status::kInvalidInput;
   }
   const Status s = validate_observations(obs);

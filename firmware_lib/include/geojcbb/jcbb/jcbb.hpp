@@ -94,7 +94,7 @@ template <typename T, class B, int K>
   const int levels = search_order(table, obs.count, cfg.order_fewest_candidates_first, subset, ws.order);
   const bool exclusion = cfg.mutual_exclusion;
   const bool optimal = cfg.optimal_criterion;
-  const T margin = cfg.ambiguity_margin;
+  const T margin = cfg.margin();
   const NodeCount budget = node_budget;
   ws.joint.clear();
   for (int j = 0; j < pred.count; ++j) ws.used[j] = 0;  // <= kMaxCandidates

@@ -82,11 +82,10 @@ class SlamStep {
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
   ///         make_strategy / chi2_inv. No state change unless kOk.
   [[nodiscard]] Status configure(const StepSettings<T>& s) {
-    AssociationConfig<T, B> cfg;
-    Status st = make_strategy(s.strategy, s, cfg);  // every option's range, besides the preset
-    if (st != Status::kOk) return st;
+    // Every option's range, besides the preset (make_strategy refuses the same settings below).
+    if (!in_range(s)) return Status::kInvalidInput;
     double gate = 0;
-    st = chi2_inv(s.new_landmark_level, 2, gate);
+    Status st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
     double static_gate = 0;  // 0: the static-gate rule off
     if (s.static_gate_level > 0) {
@@ -104,35 +103,20 @@ class SlamStep {
     align.max_range_m = s.max_range_m;
     align.half_fov_rad = s.half_fov_rad;
     if (!align.valid()) return Status::kInvalidInput;
-    reloc::LoopOptions<T> loop;
-    loop.age = s.loop_age;
-    loop.search_m = s.loop_search_m;
-    loop.search_rad = s.loop_search_rad;
-    loop.margin_nats = s.loop_margin_nats;
-    loop.confirm_scans = s.loop_confirm_scans;
-    loop.inflation = s.loop_inflation;
-    loop.model.p_detect = s.loop_detection_probability;
-    loop.model.unexplained_density = s.loop_unexplained_density;
     reloc::AlignOptions<T> loop_align = align;
     loop_align.min_inliers = s.loop_min_inliers;
-    if (!loop.valid() || !loop_align.valid()) return Status::kInvalidInput;
-    cfg_ = cfg;
-    loop_ = s.loop_check;
-    loop_opt_ = loop;
+    if (!loop_align.valid()) return Status::kInvalidInput;
+    // Last: make_strategy checks before it writes, so a refusal here changes nothing either.
+    st = make_strategy(s.strategy, s, cfg_);
+    if (st != Status::kOk) return st;
     loop_align_ = loop_align;
     loop_state_ = reloc::LoopState<T>{};
     closing_ = false;
     align_ = align;
-    reloc_ = s.relocalise;
-    reloc_lost_position_var_ = s.reloc_lost_position_var_m2;
-    reloc_lost_heading_var_ = s.reloc_lost_heading_var_rad2;
-    reloc_inflation_ = s.reloc_inflation;
-    reloc_confirm_scans_ = s.reloc_confirm_scans;
     gate_ = static_cast<T>(gate);
     view_ = ekf::Visibility<T>{s.min_range_m, s.max_range_m, s.half_fov_rad, s.occlusion_rad};
     policy_ = policy;
     filter_.first_estimates_jacobians = s.first_estimates_jacobians;
-    augment_ = s.augment;
     configured_ = true;
     return Status::kOk;
   }
@@ -153,7 +137,7 @@ class SlamStep {
   /// on (StepSettings::relocalise), each scan from the next on is aligned against the map until a
   /// pose is accepted and confirmed. The relocaliser off: nothing changes.
   void lost() {
-    if (configured_ && reloc_) state_ = Localisation::kLost;
+    if (configured_ && cfg_.relocalise) state_ = Localisation::kLost;
   }
   Localisation localisation() const { return state_; }
 
@@ -218,10 +202,10 @@ class SlamStep {
     if (!configured_) return Status::kInvalidInput;
     rs = RelocStats{};
     rs.state = state_;
-    if (!reloc_) return Status::kOk;
+    if (!cfg_.relocalise) return Status::kOk;
     if (state_ == Localisation::kTracking) {
       const T pos_var = slam_.cov(0, 0) + slam_.cov(1, 1);
-      if (!(pos_var < reloc_lost_position_var_) || !(slam_.cov(2, 2) < reloc_lost_heading_var_)) {
+      if (!(pos_var < cfg_.reloc_lost_position_var_m2) || !(slam_.cov(2, 2) < cfg_.reloc_lost_heading_var_rad2)) {
         state_ = Localisation::kLost;
       }
     }
@@ -258,17 +242,17 @@ class SlamStep {
       ekf_ws_.lm[static_cast<std::size_t>(k)] =
           align_slam_[static_cast<std::size_t>(align_ws_.index[ekf_ws_.lm[static_cast<std::size_t>(k)]])];
     }
-    st = pairs >= 2 ? slam_.relocalise_fitted(align_out_.pose, Pobs * reloc_inflation_, pairs, ekf_ws_.lm.data(),
+    st = pairs >= 2 ? slam_.relocalise_fitted(align_out_.pose, Pobs * cfg_.reloc_inflation, pairs, ekf_ws_.lm.data(),
                                               ekf_ws_.Hp.data())
                     : Status::kNotPositiveDefinite;
-    if (st != Status::kOk) st = slam_.relocalise(align_out_.pose, align_out_.cov * reloc_inflation_);
+    if (st != Status::kOk) st = slam_.relocalise(align_out_.pose, align_out_.cov * cfg_.reloc_inflation);
     if (st != Status::kOk) return st;
     lost_cov_ = lost;
     rs.relocalised = true;
-    state_ = reloc_confirm_scans_ > 0 ? Localisation::kConfirming : Localisation::kTracking;
+    state_ = cfg_.reloc_confirm_scans > 0 ? Localisation::kConfirming : Localisation::kTracking;
     rs.found = state_ == Localisation::kTracking;
     rs.state = state_;
-    confirm_left_ = reloc_confirm_scans_;
+    confirm_left_ = cfg_.reloc_confirm_scans;
     skip_confirm_ = true;  // the scan that was aligned does not confirm itself
     return Status::kOk;
   }
@@ -307,8 +291,8 @@ class SlamStep {
     if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
     ls = reloc::LoopStats<T>{};
     closing_ = false;
-    if (!loop_ || state_ != Localisation::kTracking) return Status::kOk;
-    auto old = [&](int j) { return slam_.unseen(j) >= loop_opt_.age && slam_.hits(j) >= policy_.confirm_hits; };
+    if (!cfg_.loop_check || state_ != Localisation::kTracking) return Status::kOk;
+    auto old = [&](int j) { return slam_.unseen(j) >= cfg_.loop_age && slam_.hits(j) >= policy_.confirm_hits; };
     int in_region = 0;
     for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
       const int j = slam_.index_of(pred_.id[a]);
@@ -318,9 +302,10 @@ class SlamStep {
       loop_state_ = reloc::LoopState<T>{};
       return Status::kOk;
     }
-    if (loop_state_.pending == 0 && loop_state_.agreed >= loop_opt_.settle_scans) return Status::kOk;
+    if (loop_state_.pending == 0 && loop_state_.agreed >= reloc::kLoopSettleScans) return Status::kOk;
     const Pose2<T> xp = slam_.pose();
-    const T reach = cfg_.local_radius_m + loop_opt_.search_m;
+    const T reach = cfg_.local_radius_m + cfg_.loop_search_m;
+    const reloc::SetModel<T> model{cfg_.loop_detection_probability, cfg_.loop_unexplained_density};
     align_ws_.clear_map();
     for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
       if (!old(j) || (slam_.landmark(j) - Vec2<T>(xp.x, xp.y)).squaredNorm() > reach * reach) continue;
@@ -354,16 +339,16 @@ class SlamStep {
     const bool fits_as_is = reloc::max_pair_d2(align_ws_, m, xp) <= loop_align_.gate_d2;
     Pose2<T> x_assoc = xp;
     reloc::fit_picked(align_ws_, m, x_assoc);
-    ls.ll_association = reloc::set_log_likelihood(align_ws_, m, x_assoc, loop_align_, loop_opt_.model);
+    ls.ll_association = reloc::set_log_likelihood(align_ws_, m, x_assoc, loop_align_, model);
     ls.association_pose = x_assoc;
     const T jump2 = (align_out_.pose.x - xp.x) * (align_out_.pose.x - xp.x) +
                     (align_out_.pose.y - xp.y) * (align_out_.pose.y - xp.y);
-    const bool alternative = align_out_.accepted && jump2 <= loop_opt_.search_m * loop_opt_.search_m &&
-                             std::abs(wrap_angle(align_out_.pose.theta - xp.theta)) <= loop_opt_.search_rad;
+    const bool alternative = align_out_.accepted && jump2 <= cfg_.loop_search_m * cfg_.loop_search_m &&
+                             std::abs(wrap_angle(align_out_.pose.theta - xp.theta)) <= cfg_.loop_search_rad;
     const Pose2<T> x_align = align_out_.pose;
     if (alternative) {
       reloc::align_detail::exclusive_inliers(align_ws_, m, x_align, loop_align_.gate_d2);  // its pairs in pick
-      ls.ll_alignment = reloc::set_log_likelihood(align_ws_, m, x_align, loop_align_, loop_opt_.model);
+      ls.ll_alignment = reloc::set_log_likelihood(align_ws_, m, x_align, loop_align_, model);
       ls.alignment_pose = x_align;
     } else {
       for (int i = 0; i < m; ++i) align_ws_.pick[i] = -1;  // <= kMaxObservations
@@ -371,7 +356,7 @@ class SlamStep {
     if (alternative && !reloc::align_detail::distinct(x_align, x_assoc, loop_align_)) {
       ls.verdict = reloc::LoopVerdict::kAgreed;
       loop_state_.pending = 0;
-      loop_state_.agreed = std::min(loop_state_.agreed + 1, loop_opt_.settle_scans);
+      loop_state_.agreed = std::min(loop_state_.agreed + 1, reloc::kLoopSettleScans);
       return Status::kOk;
     }
     if (!alternative && fits_as_is) {
@@ -381,7 +366,7 @@ class SlamStep {
     }
     loop_state_.agreed = 0;
     bool commit_now = false;
-    if (!alternative || !(ls.ll_alignment >= ls.ll_association + loop_opt_.margin_nats)) {
+    if (!alternative || !(ls.ll_alignment >= ls.ll_association + cfg_.loop_margin_nats)) {
       // No closure is unique and best: the association's is held too.
       ls.verdict = alternative ? reloc::LoopVerdict::kKept : reloc::LoopVerdict::kNoAlternative;
       loop_state_.pending = 0;
@@ -391,7 +376,7 @@ class SlamStep {
           !reloc::align_detail::distinct(reloc::corrected(loop_state_.correction, xp), x_align, loop_align_);
       loop_state_.pending = same ? loop_state_.pending + 1 : 1;
       loop_state_.correction = reloc::correction_between(xp, x_align);
-      commit_now = loop_state_.pending >= loop_opt_.confirm_scans;
+      commit_now = loop_state_.pending >= cfg_.loop_confirm_scans;
       ls.verdict = commit_now ? reloc::LoopVerdict::kCommitted : reloc::LoopVerdict::kPending;
     }
     // The disputed observations (paired with an old landmark by either closure): held, or paired
@@ -423,7 +408,7 @@ class SlamStep {
     Q(0, 0) += dx * dx;
     Q(1, 1) += dy * dy;
     Q(2, 2) += dth * dth;
-    close_Q_ = loop_opt_.inflation * Q;
+    close_Q_ = cfg_.loop_inflation * Q;
     close_at_ = x_align;
     closing_ = true;
     loop_state_ = reloc::LoopState<T>{};
@@ -489,7 +474,7 @@ class SlamStep {
         out.outcome[i] = Outcome::kPaired;
       } else if (f == kUnmatched) {
         out.outcome[i] = Outcome::kUnmatched;
-      } else if (!augment_ || !(assoc.d2[i] > gate_)) {
+      } else if (!cfg_.augment || !(assoc.d2[i] > gate_)) {
         out.outcome[i] = Outcome::kNewDropped;
       } else {
         FeatureId id = -1;
@@ -531,25 +516,21 @@ class SlamStep {
   ekf::Visibility<T> view_;
   ekf::LandmarkPolicy policy_;
   ekf::FilterOptions filter_;
-  bool augment_ = true;
   bool configured_ = false;
   // The relocaliser (StepSettings::relocalise).
   reloc::AlignOptions<T> align_;
   reloc::AlignWorkspace<T, B> align_ws_;
   reloc::AlignResult<T, B> align_out_;
-  bool reloc_ = false;
-  T reloc_lost_position_var_ = T(0), reloc_lost_heading_var_ = T(0), reloc_inflation_ = T(1);
-  int reloc_confirm_scans_ = 0, confirm_left_ = 0;
+  int confirm_left_ = 0;
   bool skip_confirm_ = false;
   Localisation state_ = Localisation::kTracking;
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
   // The closure check (StepSettings::loop_check): its options, memory, the aligned landmarks' filter
   // indices in push order (the relocaliser's too), and a committed closure for commit().
-  reloc::LoopOptions<T> loop_opt_;
   reloc::AlignOptions<T> loop_align_;  ///< the relocaliser's, with loop_min_inliers
   reloc::LoopState<T> loop_state_;
   std::array<std::int16_t, B::kMaxLandmarks> align_slam_{};
-  bool loop_ = false, closing_ = false;
+  bool closing_ = false;
   Pose2<T> close_at_{};
   Mat3<T> close_Q_ = Mat3<T>::Zero();
 };

@@ -1,19 +1,20 @@
 // reloc: loop closures scored, unique and confirmed before they are committed.
-// A closure is the scan's pairing with old landmarks (mapped long ago: ids at least `age` older
-// than the newest). Two hypotheses compete for them:
+// A closure is the scan's pairing with old landmarks (confirmed landmarks not paired for the
+// settings' loop_age scans). Two hypotheses compete for them:
 //   the association's   its pairs with old landmarks, at the pose fitted to them (the predicted
 //                       pose when it has fewer than two)
 //   the alignment's     reloc::align over the old landmarks alone (pose-free, unique by a margin)
 // each scored at its own pose with the set likelihood (set_log_likelihood): paired terms
 // log p_D - d2/2 - log|2 pi S|/2, log(1 - p_D) for every old landmark in view and not paired, and
 // log(density) for every observation no old landmark explains. When the poses agree, or the
-// association's scores within `margin` nats of the alignment's, the association stands. Otherwise the
+// association's scores within loop_margin_nats of the alignment's, the association stands. Otherwise the
 // alignment's closure is pending: the disputed pairs are held (left unmatched, not augmented) and
 // the closure must win again, with the same correction (alignment pose against the filter's), on
-// `confirm_scans` scans in a row; then it is committed: the pose block inflated by the correction,
+// loop_confirm_scans scans in a row; then it is committed: the pose block inflated by the correction,
 // the alignment's pairs replace the association's, and the update linearised at the alignment's
 // pose (ekf::Slam::update's `at`, an iterated EKF step), so the correlations carry the correction to
-// the landmarks mapped during the drift. docs/relocalisation.md ("Loop closures").
+// the landmarks mapped during the drift. node::SlamStep::check_loop runs it, reading its options
+// from the step's settings; docs/relocalisation.md ("Loop closures").
 // Bounds: one align() call; two fits (kFitSteps Gauss-Newton steps) and two scores, each
 // O(m + n); the association's rewrite O(m n).
 #pragma once
@@ -105,23 +106,8 @@ void fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x) {
   x = y;
 }
 
-/// The closure check's options (StepSettings loop_*).
-template <typename T>
-struct LoopOptions {
-  int age = 100;          ///< a confirmed landmark is old when not paired for this many scans (<= 255)
-  T search_m = T(20);     ///< old landmarks within the local radius + this; the alignment moves the pose at most this
-  T search_rad = T(0.5);  ///< ... and turns it at most this
-  T margin_nats = T(3);   ///< the alignment's closure must beat the association's by this
-  int confirm_scans = 2;  ///< consecutive wins, with the same correction, before the commit
-  T inflation = T(4);     ///< the pose block grows by this times the correction's square (and its fit)
-  int settle_scans = 5;   ///< agreeing checks after which the check rests until old landmarks leave the region
-  SetModel<T> model;
-  bool valid() const {
-    return age >= 1 && age <= 255 && search_m > T(0) && std::isfinite(search_m) && search_rad > T(0) &&
-           search_rad <= kPi<T> && margin_nats >= T(0) && std::isfinite(margin_nats) && confirm_scans >= 1 &&
-           confirm_scans <= 16 && inflation >= T(1) && std::isfinite(inflation) && settle_scans >= 1 && model.valid();
-  }
-};
+/// Agreeing checks after which the closure check rests until the old landmarks leave the region.
+constexpr int kLoopSettleScans = 5;
 
 /// What the check did with one scan.
 enum class LoopVerdict : std::uint8_t {
