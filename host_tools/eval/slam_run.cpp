@@ -304,7 +304,8 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
     }
     sc.added(s.result.feature[i], scan[i].truth);
   }
-  if (s.result.review.removed > 0) {
+  res.merges += s.result.review.merged;
+  if (s.result.review.removed > 0 || s.result.review.merged > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
     std::vector<bool> alive(sc.ids(), false);
     for (int j = 0; j < slam.landmarks(); ++j) alive[static_cast<std::size_t>(slam.id(j))] = true;

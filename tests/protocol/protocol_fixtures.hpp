@@ -87,6 +87,7 @@ inline Config sample<Config>() {
   c.reloc_base_pairs = 5;
   c.reloc_inflation = 9.0f;
   c.reloc_confirm_scans = 2;
+  c.reloc_lost_failed_scans = 4;
   c.loop_check = true;
   c.loop_age = 50;
   c.loop_min_inliers = 4;
@@ -97,6 +98,7 @@ inline Config sample<Config>() {
   c.loop_inflation = 9.0f;
   c.loop_detection_probability = 0.8f;
   c.loop_unexplained_density = 0.01f;
+  c.loop_merge_d2 = 6.0f;
   c.stats_period_scans = 0x1234;
   return c;
 }

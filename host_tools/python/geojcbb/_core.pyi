@@ -78,6 +78,7 @@ class Options(TypedDict, total=False):
     reloc_base_pairs: int  # default 4
     reloc_inflation: float  # default 4
     reloc_confirm_scans: int  # default 1
+    reloc_lost_failed_scans: int  # default 0
     loop_check: bool  # default 0
     loop_age: int  # default 100
     loop_min_inliers: int  # default 3
@@ -88,6 +89,7 @@ class Options(TypedDict, total=False):
     loop_inflation: float  # default 4
     loop_detection_probability: float  # default 0.9
     loop_unexplained_density: float  # default 0.003
+    loop_merge_d2: float  # default 0
     # END GENERATED: option keywords
 
 

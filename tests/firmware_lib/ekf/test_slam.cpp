@@ -1,6 +1,6 @@
 // EKF-SLAM: motion Jacobians against finite differences; predict_local's C against an explicit dense
 // H P H^T; a noise-free run stays on the truth; NEES within its 95 % bounds over a seeded Monte Carlo
-// run; bad input and capacity change no state; no allocation.
+// run; bad input and capacity change no state; no allocation; a duplicate merged.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -270,6 +270,71 @@ TEST_CASE_TEMPLATE("the filter allocates nothing", T, float, double) {
   CHECK(s3 == Status::kOk);
   CHECK(s4 == Status::kOk);
   CHECK(s5 == Status::kOk);
+}
+
+// One landmark mapped twice: first from a sure pose, then again after the pose drifted (the filter
+// believes odometry that was wrong, with an honest covariance). Merged, the constraint carries the
+// correction to the pose through the duplicate's correlation with it.
+TEST_CASE_TEMPLATE("merge: a duplicate fused into the landmark it repeats; ids stable, P definite, pose corrected", T,
+                   float, double) {
+  auto f = std::make_unique<Fixture<T>>();
+  REQUIRE(f->slam.reset(Pose2<T>{T(0), T(0), T(0)}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+  const Eigen::Vector2d world[3] = {{6, 1}, {4, -3}, {9, 4}};  // landmark 0 is mapped twice
+  Mat2<T> R;
+  R << T(0.0025), T(0), T(0), T(1e-4);
+  auto z_from = [](const Pose2<double>& x, const Eigen::Vector2d& l) -> Vec2<T> {
+    const Vec2<double> z = observe(x, Vec2<double>(l));
+    return z.cast<T>();
+  };
+  FeatureId id = -1;
+  const Pose2<double> start{0, 0, 0};
+  for (int j = 0; j < 3; ++j) {
+    REQUIRE(f->slam.augment(z_from(start, world[j]), R, id) == Status::kOk);
+    REQUIRE(id == j);
+  }
+  // The robot drives 2 m straight; the odometry says 2.4 m (the filter's pose is 0.4 m off, and unsure).
+  for (int k = 0; k < 10; ++k) {
+    REQUIRE(f->slam.predict(Odometry<T>{T(2.4), T(0), T(0.1), T(1), T(0.01)}) == Status::kOk);
+  }
+  const Pose2<double> truth{2, 0, 0};
+  REQUIRE(f->slam.augment(z_from(truth, world[0]), R, id) == Status::kOk);  // the duplicate, id 3
+  REQUIRE(id == 3);
+  auto pose_error = [&] {
+    const Pose2<T> e = f->slam.pose();
+    return std::hypot(double(e.x) - truth.x, double(e.y) - truth.y);
+  };
+  const double error_before = pose_error();
+  REQUIRE(error_before > 0.3);
+  // Duplicates are close in their own uncertainty, distinct landmarks are not.
+  CHECK(f->slam.duplicate_d2(0, 3) < T(9.21));
+  CHECK(f->slam.duplicate_d2(0, 1) > T(100));
+  CHECK(f->slam.duplicate_d2(1, 3) > T(100));
+  CHECK(std::isinf(f->slam.duplicate_d2(0, 0)));
+  CHECK(std::isinf(f->slam.duplicate_d2(0, 4)));
+  // Bad input changes nothing.
+  auto snapshot = std::make_unique<Slam<T, EB>>(f->slam);
+  auto same = [&] { return std::memcmp(snapshot.get(), &f->slam, sizeof(f->slam)) == 0; };
+  CHECK(f->slam.merge(0, 0, f->ws) == Status::kInvalidInput);
+  CHECK(f->slam.merge(-1, 3, f->ws) == Status::kInvalidInput);
+  CHECK(f->slam.merge(0, 4, f->ws) == Status::kInvalidInput);
+  CHECK(same());
+  Status st = Status::kNoConvergence;
+  CHECK(allocations_during([&] { st = f->slam.merge(0, 3, f->ws); }) == 0);
+  REQUIRE(st == Status::kOk);
+  REQUIRE(f->slam.landmarks() == 3);
+  for (int j = 0; j < 3; ++j) CHECK(f->slam.id(j) == j);
+  CHECK(f->slam.index_of(3) == -1);
+  CHECK(f->slam.hits(0) == 2);  // its sightings and the duplicate's
+  CHECK((f->slam.landmark(0).template cast<double>() - world[0]).norm() < 0.05);
+  CHECK(pose_error() < 0.25 * error_before);
+  Eigen::MatrixXd P(f->slam.dim(), f->slam.dim());
+  for (int r = 0; r < f->slam.dim(); ++r)
+    for (int c = 0; c < f->slam.dim(); ++c) P(r, c) = double(f->slam.cov(r, c));
+  CHECK(P.isApprox(P.transpose()));
+  CHECK(Eigen::LLT<Eigen::MatrixXd>(P).info() == Eigen::Success);
+  // A new landmark still gets a fresh id, never the merged one.
+  REQUIRE(f->slam.augment(z_from(truth, world[1]), R, id) == Status::kOk);
+  CHECK(id == 4);
 }
 
 // Landmark bookkeeping: five landmarks ahead of the robot; the association pairs some of them.

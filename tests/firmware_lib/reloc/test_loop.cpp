@@ -1,8 +1,9 @@
 // Loop closures scored, unique and confirmed (reloc/loop.hpp, node::SlamStep::check_loop): the set
 // likelihood on a hand-computed case; a drifted filter's closure held while pending, committed on
 // the confirming scan and then right; a correction that changes between scans not committed; an
-// agreeing closure left alone; the filter's linearisation point and pose inflation; bad input a
-// Status with nothing changed; no allocation; float and double agree.
+// agreeing closure left alone; a closure's duplicate merged (ids stable, P definite); the filter's
+// linearisation point and pose inflation; bad input a Status with nothing changed; no allocation;
+// float and double agree.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -157,6 +158,53 @@ TEST_CASE("loop: the closure check off leaves the step as it was") {
   REQUIRE(off->step.step(off->obs, off->out) == Status::kOk);
   CHECK(off->out.loop.verdict == reloc::LoopVerdict::kNone);
   CHECK(off->out.counts.loop == 0u);
+}
+
+TEST_CASE_TEMPLATE("loop: a closure's duplicate is merged into the landmark it repeats; ids stay, P stays definite", T,
+                   float, double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4};
+  int k = -1;  // the first landmark in view: it gets a duplicate, mapped 0.36 m off and unsure
+  for (std::size_t j = 0; j < map.size() && k < 0; ++j) {
+    const double dx = map[j].x() - truth.x, dy = map[j].y() - truth.y;
+    if (std::hypot(dx, dy) < 15 && std::abs(wrap_angle(std::atan2(dy, dx) - truth.theta)) < 1.2) k = int(j);
+  }
+  REQUIRE(k >= 0);
+  for (const T merge_d2 : {T(0), T(9.21)}) {  // off; chi2(0.99, 2)
+    CAPTURE(merge_d2);
+    StepSettings<T> s = test::reloc_settings<T>();
+    s.loop_age = 1;
+    s.loop_merge_d2 = merge_d2;
+    auto rig = test::make_known_map_rig<T, B>(map, s, truth, Mat3<T>::Identity() * T(1e-4));
+    FeatureId dup = -1;
+    const Eigen::Vector2d copy = map[std::size_t(k)] + Eigen::Vector2d(0.3, -0.2);
+    const Vec2<T> at(T(copy.x()), T(copy.y()));
+    REQUIRE(rig->step.add_known_landmark(at, Mat2<T>::Identity() * T(0.25), dup) == Status::kOk);
+    REQUIRE(dup == FeatureId(map.size()));
+    rig->obs.clear();
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // every landmark one review unseen: old
+    observe_from(map, truth, rig->obs);
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // re-sights old landmarks: a closure
+    const ekf::Slam<T, B>& slam = rig->step.slam();
+    if (merge_d2 == T(0)) {
+      CHECK(rig->out.review.merged == 0);
+      CHECK(slam.landmarks() == int(map.size()) + 1);
+      continue;
+    }
+    CHECK(rig->out.review.merged == 1);
+    REQUIRE(slam.landmarks() == int(map.size()));
+    CHECK(slam.index_of(dup) == -1);
+    for (int j = 0; j < int(map.size()); ++j) CHECK(slam.id(j) == j);  // the others' ids and order
+    CHECK((slam.landmark(k).template cast<double>() - map[std::size_t(k)]).norm() < 0.01);
+    Eigen::MatrixXd P(slam.dim(), slam.dim());
+    for (int r = 0; r < slam.dim(); ++r)
+      for (int c = 0; c < slam.dim(); ++c) P(r, c) = double(slam.cov(r, c));
+    CHECK(P.isApprox(P.transpose()));
+    CHECK(Eigen::LLT<Eigen::MatrixXd>(P).info() == Eigen::Success);
+    // The next scan, the duplicate gone: every observation pairs as before.
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+  }
 }
 
 TEST_CASE_TEMPLATE("ekf: an update linearised at the estimate is the plain update; inflate_pose", T, float, double) {

@@ -63,6 +63,36 @@ TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on t
   CHECK(rig->step.localisation() == node::Localisation::kTracking);
 }
 
+TEST_CASE_TEMPLATE("reloc step: a kidnap the covariance does not show is lost after failed scans, then found", T, float,
+                   double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4};  // carried 14 m and 120 degrees
+  for (int failures : {0, 3}) {
+    CAPTURE(failures);
+    StepSettings<T> s = test::reloc_settings<T>();
+    s.relocalise = true;
+    s.reloc_lost_failed_scans = failures;
+    auto rig = test::make_known_map_rig<T, B>(map, s, before, Mat3<T>::Identity() * T(1e-4));
+    observe_from(map, after, rig->obs);  // the filter is sure it is still at `before`
+    REQUIRE(rig->obs.count >= 6);
+    for (int k = 1; k <= 3; ++k) {
+      REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+      CHECK(!rig->out.reloc.aligned);
+      for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] != node::Outcome::kPaired);
+      const bool lost = failures > 0 && k == failures;
+      CHECK(rig->step.localisation() == (lost ? node::Localisation::kLost : node::Localisation::kTracking));
+    }
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(rig->out.reloc.aligned == (failures > 0));
+    CHECK(rig->out.reloc.relocalised == (failures > 0));
+    if (failures > 0) {
+      CHECK(position_error(rig->step, after) < 0.05);
+    } else {
+      CHECK(position_error(rig->step, after) > 10);  // off: the filter never notices
+    }
+  }
+}
+
 TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the robot back to lost", T, float, double) {
   const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4}, elsewhere{-8, 6, -1.0};

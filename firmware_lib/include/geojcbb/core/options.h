@@ -99,6 +99,8 @@
     "the aligned pose's covariance is the fit's times this (the scan is then used again in the update)") \
   X(INT, reloc_confirm_scans, 1, (CLOSED, 0, 16), "", "--reloc-confirm-scans", \
     "scans after the relocalisation that must pair reloc_min_inliers landmarks before the robot is found") \
+  X(INT, reloc_lost_failed_scans, 0, (CLOSED, 0, 255), "scans", "--reloc-lost-failed-scans", \
+    "the robot is lost after this many scans in a row that pair no landmark with reloc_min_inliers in view (0: off)") \
   X(BOOL, loop_check, 0, (ANY, 0, 0), "", "--loop-check", \
     "score a closure with old landmarks against a pose-free alignment; commit only a unique, confirmed winner") \
   X(INT, loop_age, 100, (CLOSED, 1, 255), "scans", "--loop-age", \
@@ -118,7 +120,9 @@
   X(REAL, loop_detection_probability, 0.9, (OPEN, 0, 1), "", "--loop-pd", \
     "set likelihood: the probability that an old landmark in view is observed") \
   X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
-    "set likelihood: observations per m^2 that no old landmark explains (clutter, newer landmarks)")
+    "set likelihood: observations per m^2 that no old landmark explains (clutter, newer landmarks)") \
+  X(REAL, loop_merge_d2, 0, (GE, 0, 0), "", "--loop-merge-d2", \
+    "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

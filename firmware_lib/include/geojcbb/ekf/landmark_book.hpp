@@ -7,6 +7,7 @@
 // not here (ekf/slam.hpp keeps them in the same index order). No heap.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -45,6 +46,7 @@ struct ReviewStats {
   int removed = 0;         ///< landmarks removed (every rule)
   int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
   int removed_moved = 0;   ///< of those, removed by the static-gate rule
+  int merged = 0;          ///< landmarks merged into another (node::SlamStep: a loop closure's duplicates)
 };
 
 /// Why the current review removes a landmark whatever its counters say.
@@ -65,7 +67,7 @@ struct LandmarkRecord {
   std::uint16_t hits;      ///< reviews paired (saturating at 65535; the first sighting counts)
   std::uint16_t expected;  ///< reviews in view or paired (saturating)
   std::uint8_t misses;     ///< reviews in view and not paired (saturating at 255)
-  std::uint8_t age;        ///< reviews since added, while tentative (saturating)
+  std::uint8_t age;        ///< reviews since added (saturating at 255)
   std::uint8_t unseen;     ///< reviews since it was last paired (saturating at 255): a loop closure's age
   Drop drop;               ///< review scratch: set by count() and the filter's static gate
 };
@@ -151,7 +153,7 @@ class LandmarkBook {
       }
     }
   }
-  /// The end of a review: a marked landmark is removed, a tentative one ages and is removed after
+  /// The end of a review: a marked landmark is removed, every one ages, a tentative one is removed after
   /// max_misses misses or max_tentative_reviews reviews; the others' indices go to keep, increasing.
   /// Counts the removals in stats.
   /// @return how many are kept
@@ -164,14 +166,27 @@ class LandmarkBook {
         stats.removed_moved += r.drop == Drop::kMoved;
         continue;
       }
+      if (r.age < 255) ++r.age;
       if (r.hits < policy.confirm_hits) {
-        if (r.age < 255) ++r.age;
         if (r.misses >= policy.max_misses || r.age >= policy.max_tentative_reviews) continue;
       }
       keep[kept++] = static_cast<std::int16_t>(j);
     }
     stats.removed = n_ - kept;
     return kept;
+  }
+  /// Record `into` takes the sightings of record `from` (one landmark mapped twice; the filter
+  /// removes `from` afterwards): hits and expected add (saturating), misses and unseen take the
+  /// smaller, age the larger, the miss streak restarts. `into` keeps its id, first estimate and its P0.
+  void absorb(int into, int from) {
+    LandmarkRecord<T>& a = rec_[into];
+    const LandmarkRecord<T>& b = rec_[from];
+    a.hits = static_cast<std::uint16_t>(std::min(65535, int(a.hits) + int(b.hits)));
+    a.expected = static_cast<std::uint16_t>(std::min(65535, int(a.expected) + int(b.expected)));
+    a.misses = std::min(a.misses, b.misses);
+    a.age = std::max(a.age, b.age);
+    a.unseen = std::min(a.unseen, b.unseen);
+    a.miss_p = T(1);
   }
   /// Keeps the records keep[0 .. kept) (increasing), in that order; the others are removed.
   /// Every source index is at or after its destination, so nothing is overwritten before it is read.

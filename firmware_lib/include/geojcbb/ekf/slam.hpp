@@ -29,6 +29,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/range_bearing.hpp"
@@ -108,6 +109,8 @@ class Slam {
   /// Variance floor of the update: no fusion may shrink a variance below this fraction of its
   /// value before the block (Covariance::kMinVarianceRatio).
   static constexpr T kMinVarianceRatio = Covariance::kMinVarianceRatio;
+  /// merge()'s constraint noise: (1 mm)^2 on each axis of l_keep - l_drop, so S stays definite.
+  static constexpr T kMergeNoise_m2 = T(1e-6);
 
   /// Starts a map at pose x0 with covariance P0 (3x3, symmetric positive definite).
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
@@ -224,6 +227,8 @@ class Slam {
   int hits(int j) const { return book_[j].hits; }
   /// Reviews since landmark index j was last paired (saturating at 255).
   int unseen(int j) const { return book_[j].unseen; }
+  /// Reviews since landmark j was added (saturating at 255).
+  int age(int j) const { return book_[j].age; }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   int index_of(FeatureId id) const { return book_.index_of(id); }
   int dim() const { return Layout::landmark(landmarks()); }
@@ -572,7 +577,82 @@ class Slam {
     return Status::kOk;
   }
 
+  /// How far apart landmarks a and b (indices) are, in their own uncertainty: d = l_a - l_b, its
+  /// covariance P_aa + P_bb - P_ab - P_ba (their correlation counts: two estimates of one landmark
+  /// made from one drifting pose are close in this metric even when far in metres).
+  /// @return d^T S^-1 d; +inf for an index out of range, a == b, or S not positive definite. Reads
+  ///         only.  O(1)
+  T duplicate_d2(int a, int b) const {
+    if (a < 0 || b < 0 || a >= landmarks() || b >= landmarks() || a == b) return std::numeric_limits<T>::infinity();
+    const int la = Layout::landmark(a), lb = Layout::landmark(b);
+    const T s00 = cov(la, la) + cov(lb, lb) - T(2) * cov(la, lb);
+    const T s01 = cov(la, la + 1) + cov(lb, lb + 1) - cov(la, lb + 1) - cov(la + 1, lb);
+    const T s11 = cov(la + 1, la + 1) + cov(lb + 1, lb + 1) - T(2) * cov(la + 1, lb + 1);
+    const T det = s00 * s11 - s01 * s01;
+    if (!(s00 > T(0)) || !(det > T(0)) || !std::isfinite(det)) return std::numeric_limits<T>::infinity();
+    const T dx = x_[la] - x_[lb], dy = x_[la + 1] - x_[lb + 1];
+    const T d2 = (s11 * dx * dx - T(2) * s01 * dx * dy + s00 * dy * dy) / det;
+    return std::isfinite(d2) ? d2 : std::numeric_limits<T>::infinity();
+  }
+
+  /// Landmarks keep and drop (indices) are one landmark mapped twice (a duplicate a loop closure
+  /// reveals): the constraint l_keep - l_drop = 0 is fused as an update (H = [0 .. I .. -I ..],
+  /// noise kMergeNoise_m2 I, which keeps S definite), then drop is removed (x and P compacted; every
+  /// other id unchanged, keep's record takes drop's sightings, LandmarkBook::absorb).
+  /// @return kOk; kInvalidInput for an index out of range or keep == drop; kNotPositiveDefinite when
+  ///         S, or a pose or landmark block after the downdate, is not; kNonFinite when the mean
+  ///         would overflow. No state changes unless kOk.  O(n^2)
+  [[nodiscard]] Status merge(int keep, int drop, SlamWorkspace<T, B>& ws) {
+    if (keep < 0 || drop < 0 || keep >= landmarks() || drop >= landmarks() || keep == drop) {
+      return Status::kInvalidInput;
+    }
+    const int n = dim();
+    constexpr int K = kUpdateBlockCols;
+    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
+    const int lk = Layout::landmark(keep), ld = Layout::landmark(drop);
+    for (int r = 0; r < n; ++r) {  // A = P H^T, two columns;  <= kMaxState
+      V(r, 0) = cov(r, lk) - cov(r, ld);
+      V(r, 1) = cov(r, lk + 1) - cov(r, ld + 1);
+      for (int c = 2; c < K; ++c) V(r, c) = T(0);  // <= K
+    }
+    // S = H A + R = L L^T (2x2), then V <- A L^-T.
+    const T s00 = V(lk, 0) - V(ld, 0) + kMergeNoise_m2, s10 = V(lk + 1, 0) - V(ld + 1, 0);
+    const T s11 = V(lk + 1, 1) - V(ld + 1, 1) + kMergeNoise_m2;
+    if (!(s00 > T(0)) || !std::isfinite(s00)) return Status::kNotPositiveDefinite;
+    const T l00 = std::sqrt(s00), l10 = s10 / l00, d11 = s11 - l10 * l10;
+    if (!(d11 > T(0)) || !std::isfinite(d11)) return Status::kNotPositiveDefinite;
+    const T l11 = std::sqrt(d11);
+    for (int r = 0; r < n; ++r) {  // <= kMaxState
+      V(r, 0) = V(r, 0) / l00;
+      V(r, 1) = (V(r, 1) - l10 * V(r, 0)) / l11;
+    }
+    if (!downdate_keeps_blocks_definite(n, ws)) return Status::kNotPositiveDefinite;
+    // The innovation 0 - (l_keep - l_drop), whitened: w = L^-1 nu.
+    const T w0 = -(x_[lk] - x_[ld]) / l00;
+    const T w1 = (-(x_[lk + 1] - x_[ld + 1]) - l10 * w0) / l11;
+    for (int r = 0; r < n; ++r) {  // <= kMaxState
+      if (!std::isfinite(x_[r] + V(r, 0) * w0 + V(r, 1) * w1)) return Status::kNonFinite;
+    }
+    for (int r = 0; r < n; ++r) x_[r] += V(r, 0) * w0 + V(r, 1) * w1;  // <= kMaxState
+    x_[2] = wrap_angle(x_[2]);
+    P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
+    book_.absorb(keep, drop);
+    remove(drop);
+    return Status::kOk;
+  }
+
  private:
+  /// Removes landmark j (x, P and its record; the others keep their ids and order). Out of line:
+  /// its keep[] (2 bytes a landmark) stays out of the caller's frame.  O(n^2)
+  [[gnu::noinline]] void remove(int j) {
+    std::int16_t keep[B::kMaxLandmarks];
+    int kept = 0;
+    for (int k = 0; k < landmarks(); ++k) {  // <= kMaxLandmarks
+      if (k != j) keep[kept++] = static_cast<std::int16_t>(k);
+    }
+    move_kept(keep, kept);
+    book_.retain(keep, kept);
+  }
   /// The static gate (LandmarkPolicy::static_gate_d2) on landmark j: a static landmark's estimate
   /// only refines its first one, so l - l0 has covariance P0 - P (the information gained), floored
   /// by kStaticFloor_m2 against a near-singular gain. Whether its d2 exceeds gate_d2.

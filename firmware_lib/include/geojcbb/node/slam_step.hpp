@@ -9,6 +9,7 @@
 // on the device. Every call validates first and changes no state unless it returns kOk.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 
@@ -78,6 +79,9 @@ using CounterFn = std::uint32_t (*)();
 template <typename T, class B>
 class SlamStep {
  public:
+  /// Merges of a loop closure's duplicates after one scan's review, at most (loop_merge_d2).
+  static constexpr int kMaxMergesPerScan = 4;
+
   /// Builds the strategy's configuration and the augmentation gate.
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
   ///         make_strategy / chi2_inv. No state change unless kOk.
@@ -127,7 +131,12 @@ class SlamStep {
   /// @return the statuses of ekf::Slam::reset.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) {
     const Status st = slam_.reset(x0, P0, filter_);
-    if (st == Status::kOk) state_ = Localisation::kTracking;
+    if (st == Status::kOk) {
+      state_ = Localisation::kTracking;
+      failed_scans_ = 0;
+      merge_left_ = 0;
+      closure_count_ = 0;
+    }
     return st;
   }
   /// ekf::Slam::relocalise: the pose re-initialised (robot carried), the map kept.
@@ -260,11 +269,20 @@ class SlamStep {
   /// After commit(): while confirming, a scan after the relocalisation that pairs at least
   /// reloc_min_inliers map landmarks in a jointly compatible answer counts; reloc_confirm_scans of
   /// them make the robot found, one that does not sends it back to lost (with the pose covariance
-  /// it had when lost).
+  /// it had when lost). While tracking, with reloc_lost_failed_scans > 0: a scan that pairs nothing
+  /// although it has reloc_min_inliers observations and as many landmarks in the local region
+  /// fails; that many failures in a row make the robot lost (a kidnap the covariance does not show).
   void confirm(const StepResult<T, B>& out, bool jointly_compatible, RelocStats& rs) {
+    int paired = 0;
+    for (int i = 0; i < out.count; ++i) paired += out.outcome[i] == Outcome::kPaired;  // <= kMaxObservations
+    const int need = cfg_.reloc_min_inliers;
+    const bool failed = paired == 0 && out.count >= need && pred_.count >= need;
+    failed_scans_ = state_ == Localisation::kTracking && failed ? failed_scans_ + 1 : 0;
+    if (cfg_.relocalise && cfg_.reloc_lost_failed_scans > 0 && failed_scans_ >= cfg_.reloc_lost_failed_scans) {
+      state_ = Localisation::kLost;
+      failed_scans_ = 0;
+    }
     if (state_ == Localisation::kConfirming && !skip_confirm_) {
-      int paired = 0;
-      for (int i = 0; i < out.count; ++i) paired += out.outcome[i] == Outcome::kPaired;  // <= kMaxObservations
       if (paired >= align_.min_inliers && jointly_compatible) {
         if (--confirm_left_ <= 0) {
           state_ = Localisation::kTracking;
@@ -488,9 +506,18 @@ class SlamStep {
         }
       }
     }
+    // A loop closure (check_loop's, or the association's pairs with old landmarks): the old
+    // landmarks it re-pairs, each with how long it was unseen, for the merges of its duplicates
+    // after this scan's review and the next kLoopSettleScans - 1.
+    if (cfg_.loop_merge_d2 > T(0)) note_closure(assoc);
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above.
     if (slam_.review(pred_, assoc, view_, policy_, rs) != Status::kOk) rs = ekf::ReviewStats{};
+    if (merge_left_ > 0) {
+      --merge_left_;
+      rs.merged = merge_duplicates(assoc);
+      for (int k = 0; k < closure_count_; ++k) ++closure_limit_[k];  // <= kMaxObservations: a review later
+    }
     const std::uint32_t t4 = clock ? clock() : 0;
     out.diag = assoc.diag;
     out.review = rs;
@@ -499,6 +526,70 @@ class SlamStep {
   }
 
  private:
+  /// Before commit()'s review (loop_merge_d2 > 0): a scan that pairs old landmarks (unpaired for
+  /// loop_age reviews, confirmed) is a closure; they become the closure set, each with the reviews
+  /// it was unseen plus one (closure_limit_, a landmark added later has at most that age after
+  /// this review), and merge_duplicates() runs after this review and the next
+  /// kLoopSettleScans - 1. A scan that pairs none keeps the set of the last closure.
+  void note_closure(const Association<T, B>& assoc) {
+    int n = 0;
+    for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      if (j < 0 || slam_.unseen(j) < cfg_.loop_age || slam_.hits(j) < policy_.confirm_hits) continue;
+      closure_id_[static_cast<std::size_t>(n)] = assoc.feature[i];
+      closure_limit_[static_cast<std::size_t>(n)] = static_cast<std::int16_t>(slam_.unseen(j) + 1);
+      ++n;
+    }
+    if (n == 0) return;
+    closure_count_ = n;
+    merge_left_ = reloc::kLoopSettleScans;
+  }
+
+  /// After a loop closure (loop_merge_d2 > 0, commit()): a duplicate is a landmark of this scan's
+  /// local region added while an old landmark of the closure set was unseen (its age at most that
+  /// landmark's closure_limit_: drift made a copy because the original was not recognised) and
+  /// within loop_merge_d2 of it in ekf::Slam::duplicate_d2, the two not both paired by this scan
+  /// (two observations of one scan are two landmarks). The closest such pair is merged
+  /// (ekf::Slam::merge; the old landmark keeps its id), up to kMaxMergesPerScan times. Two landmarks
+  /// both seen since the original's last sighting are never merged, however close.
+  /// O(kMaxMergesPerScan (kMaxObservations kMaxCandidates + n^2))
+  /// Out of line: its flags stay out of commit()'s frame (512 B at the large bounds).
+  /// @return landmarks merged
+  [[gnu::noinline]] int merge_duplicates(const Association<T, B>& assoc) {
+    bool paired[B::kMaxCandidates];
+    for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+      paired[a] = false;
+      for (int i = 0; i < assoc.count && !paired[a]; ++i) {  // <= kMaxObservations
+        paired[a] = assoc.feature[i] == pred_.id[a];
+      }
+    }
+    int merged = 0;
+    for (int m = 0; m < kMaxMergesPerScan; ++m) {  // <= kMaxMergesPerScan
+      int keep = -1, drop = -1;
+      T best = cfg_.loop_merge_d2;
+      for (int k = 0; k < closure_count_; ++k) {  // <= kMaxObservations: the closure's old landmarks
+        const FeatureId id = closure_id_[static_cast<std::size_t>(k)];
+        const int ja = slam_.index_of(id);
+        if (ja < 0) continue;  // removed since
+        bool a_paired = false;
+        for (int i = 0; i < assoc.count && !a_paired; ++i) a_paired = assoc.feature[i] == id;  // <= kMaxObservations
+        for (int b = 0; b < pred_.count; ++b) {                                                // <= kMaxCandidates
+          const int jb = slam_.index_of(pred_.id[b]);
+          if (jb < 0 || jb == ja || (a_paired && paired[b])) continue;
+          if (slam_.age(jb) > closure_limit_[static_cast<std::size_t>(k)]) continue;  // older than the absence
+          const T d2 = slam_.duplicate_d2(ja, jb);
+          if (!(d2 < best)) continue;
+          best = d2;
+          keep = ja;
+          drop = jb;
+        }
+      }
+      if (keep < 0 || slam_.merge(keep, drop, ekf_ws_) != Status::kOk) break;
+      ++merged;
+    }
+    return merged;
+  }
+
   Mat2<T> landmark_covariance(int j) const {
     const int r = ekf::Layout::landmark(j);
     Mat2<T> P;
@@ -522,6 +613,11 @@ class SlamStep {
   reloc::AlignWorkspace<T, B> align_ws_;
   reloc::AlignResult<T, B> align_out_;
   int confirm_left_ = 0;
+  int merge_left_ = 0;     ///< scans after a loop closure whose review is followed by merge_duplicates()
+  int closure_count_ = 0;  ///< the last closure's old landmarks (note_closure)
+  std::array<FeatureId, B::kMaxObservations> closure_id_{};
+  std::array<std::int16_t, B::kMaxObservations> closure_limit_{};  ///< the age a duplicate may have, at most
+  int failed_scans_ = 0;  ///< scans in a row that paired nothing while tracking (reloc_lost_failed_scans)
   bool skip_confirm_ = false;
   Localisation state_ = Localisation::kTracking;
   Mat3<T> lost_cov_ = Mat3<T>::Identity();

@@ -40,6 +40,7 @@ struct ReportRow {
   int fp_to_duplicate = 0, fp_to_original = 0;         ///< false pairs to a duplicate / to an original landmark
   int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
+  int merges = 0;                                      ///< duplicates merged after closures (loop_merge_d2)
   double reloc_error_m = NAN;                          ///< mean position error after the kidnap [m]
   double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
@@ -135,13 +136,14 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
     std::fprintf(f,
                  "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
                  "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
-                 "clutter paired; with --loop-check, closures committed and scans held pending\n");
-    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s\n", "strategy", "runs > 5", "duplicate", "original", "clutter",
-                 "closures", "held");
+                 "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
+                 "duplicates merged\n");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s\n", "strategy", "runs > 5", "duplicate", "original",
+                 "clutter", "closures", "held", "merged");
     for (const ReportRow& r : rows) {
       if (r.runs > 0)
-        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d\n", r.name.c_str(), r.runs_over_5_fp, r.fp_to_duplicate,
-                     r.fp_to_original, r.fp_clutter, r.loop_commits, r.loop_held_scans);
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d\n", r.name.c_str(), r.runs_over_5_fp, r.fp_to_duplicate,
+                     r.fp_to_original, r.fp_clutter, r.loop_commits, r.loop_held_scans, r.merges);
     }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
@@ -202,6 +204,7 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"runs_over_5_false_pairs", r.runs_over_5_fp},
                  {"loop_closures_committed", r.loop_commits},
                  {"loop_scans_held", r.loop_held_scans},
+                 {"landmarks_merged", r.merges},
                  {"false_pairs_to_duplicate", r.fp_to_duplicate},
                  {"false_pairs_to_original", r.fp_to_original},
                  {"pose_error_after_kidnap_m", num(r.reloc_error_m)},

@@ -29,6 +29,7 @@ struct RunAggregate {
   int fp_to_duplicate = 0, fp_to_original = 0;      ///< RunResult's, summed
   int runs_over_5_fp = 0;                           ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;        ///< RunResult's, summed
+  int merges = 0;                                   ///< RunResult's, summed
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
   RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;

@@ -144,6 +144,7 @@ struct RunResult {
   int relocalisations = 0;             ///< poses the relocaliser accepted
   int loop_commits = 0;                ///< loop closures the closure check committed (loop_check)
   int loop_held_scans = 0;             ///< scans whose disputed pairs it held (a pending closure)
+  int merges = 0;                      ///< duplicates merged after a closure (loop_merge_d2)
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,
          mean_abs_y_m = 0;        ///< over the scans with a true pose

@@ -206,6 +206,7 @@ struct Config : Codec<Config> {
   std::uint8_t reloc_base_pairs = 4;          ///< 1 .. 8
   float reloc_inflation = 4.0f;               ///< >= 1
   std::uint8_t reloc_confirm_scans = 1;       ///< 0 .. 16
+  std::uint8_t reloc_lost_failed_scans = 0;   ///< 0: off
   bool loop_check = false;                    ///< loop closures scored against a pose-free alignment
   std::uint8_t loop_age = 100;                ///< scans unpaired that make a landmark old, >= 1
   std::uint8_t loop_min_inliers = 3;          ///< >= 3
@@ -216,6 +217,7 @@ struct Config : Codec<Config> {
   float loop_inflation = 4.0f;                ///< >= 1
   float loop_detection_probability = 0.9f;    ///< (0, 1)
   float loop_unexplained_density = 0.003f;    ///< > 0
+  float loop_merge_d2 = 0.0f;                 ///< >= 0 (0: off)
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -270,6 +272,8 @@ struct Config : Codec<Config> {
         field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
         field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
         field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
+        field("reloc_lost_failed_scans", &Config::reloc_lost_failed_scans, range::any(), "scans",
+              "lost after this many scans in a row that pair nothing (0: off)"),
         field("loop_check", &Config::loop_check, range::one_of(0, 1), "", "loop closures checked before commit"),
         field("loop_age", &Config::loop_age, range::at_least(1), "scans", "unpaired this long: an old landmark"),
         field("loop_min_inliers", &Config::loop_min_inliers, range::at_least(3)),
@@ -281,6 +285,8 @@ struct Config : Codec<Config> {
         field("loop_detection_probability", &Config::loop_detection_probability,
               range::interval(0.0f, 1.0f, true, true)),
         field("loop_unexplained_density", &Config::loop_unexplained_density, range::above(0.0f), "1/m^2"),
+        field("loop_merge_d2", &Config::loop_merge_d2, range::not_below(0.0f), "",
+              "after a closure, landmarks closer than this d2 are merged (0: off)"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -699,7 +705,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 124 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 129 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
