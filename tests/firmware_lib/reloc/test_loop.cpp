@@ -2,8 +2,8 @@
 // likelihood on a hand-computed case; a drifted filter's closure held while pending, committed on
 // the confirming scan and then right; a correction that changes between scans not committed; an
 // agreeing closure left alone; a closure's duplicate merged (ids stable, P definite); the filter's
-// linearisation point and pose inflation; bad input a Status with nothing changed; no allocation;
-// float and double agree.
+// linearisation point, pose inflation and an update in rounds; bad input a Status with nothing
+// changed; no allocation; float and double agree.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -247,4 +247,50 @@ TEST_CASE_TEMPLATE("ekf: an update linearised at the estimate is the plain updat
   CHECK(b.pose_covariance() == Prr);
   CHECK(b.replace_pose_covariance(-Prr) == Status::kNotPositiveDefinite);
   CHECK(b.pose_covariance() == Prr);
+}
+
+TEST_CASE_TEMPLATE("ekf: an update in rounds takes each round's pairs alone, at the estimate the rounds before left", T,
+                   float, double) {
+  // A committed closure's pairs go in rounds (SlamStep::kClosureRounds): round r of update() must
+  // be the update with only that round's pairs, bit for bit, and the rounds one after the other the
+  // sequential updates.
+  ekf::Slam<T, B> a, b;
+  const Pose2<T> x0{T(1), T(2), T(0.3)};
+  const Mat3<T> P0 = Vec3<T>(T(0.04), T(0.04), T(0.01)).asDiagonal();
+  REQUIRE(a.reset(x0, P0) == Status::kOk);
+  REQUIRE(b.reset(x0, P0) == Status::kOk);
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  const Vec2<T> z0[3] = {Vec2<T>(T(5), T(0.2)), Vec2<T>(T(4), T(-0.5)), Vec2<T>(T(6), T(1.0))};
+  FeatureId ids[3] = {-1, -1, -1};
+  for (int k = 0; k < 3; ++k) {
+    REQUIRE(a.augment(z0[k], R, ids[k]) == Status::kOk);
+    REQUIRE(b.augment(z0[k], R, ids[k]) == Status::kOk);
+  }
+  Observations<T, B> obs;
+  for (int k = 0; k < 3; ++k) REQUIRE(obs.push(z0[k] + Vec2<T>(T(0.1), T(0.01) * T(k + 1)), R) == Status::kOk);
+  Association<T, B> all;
+  all.count = 3;
+  for (int k = 0; k < 3; ++k) all.feature[k] = ids[k];
+  const std::uint8_t rounds[3] = {1, 0, 1};  // observation 1 first, then 0 and 2
+  ekf::SlamWorkspace<T, B> ws;
+  const Pose2<T> at{T(1.05), T(1.95), T(0.31)};
+  // a: in rounds; b: the same pairs as separate associations.
+  REQUIRE(a.update(obs, all, ws, &at, rounds, 0) == Status::kOk);
+  Association<T, B> first = all, second = all;
+  first.feature[0] = first.feature[2] = kUnmatched;
+  second.feature[1] = kUnmatched;
+  REQUIRE(b.update(obs, first, ws, &at) == Status::kOk);
+  for (int r = 0; r < b.dim(); ++r) CHECK(a.x(r) == b.x(r));
+  REQUIRE(a.update(obs, all, ws, nullptr, rounds, 1) == Status::kOk);
+  REQUIRE(b.update(obs, second, ws) == Status::kOk);
+  for (int r = 0; r < b.dim(); ++r) {
+    CHECK(a.x(r) == b.x(r));
+    for (int c = 0; c < b.dim(); ++c) CHECK(a.cov(r, c) == b.cov(r, c));
+  }
+  // A round with no pair changes nothing.
+  const Pose2<T> before = a.pose();
+  REQUIRE(a.update(obs, all, ws, nullptr, rounds, 2) == Status::kOk);
+  CHECK(a.pose().x == before.x);
+  CHECK(a.pose().theta == before.theta);
 }

@@ -358,8 +358,12 @@ class Slam {
   /// `at` (nullptr: the estimate): the pose the measurements are linearised at, an iterated EKF's
   /// step from a better point than the estimate (a loop closure's fitted pose, reloc/loop.hpp): the
   /// innovation becomes z - h(at) - H (x - at), the correction still applies to the estimate x.
+  ///
+  /// `rounds` (nullptr: every pair): observation i's pair takes part only when rounds[i] ==
+  /// this_round; a loop closure's pairs applied in rounds, most certain first, each round
+  /// linearised at the estimate the rounds before it left (node::SlamStep::commit).
   [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws,
-                              const Pose2<T>* at = nullptr) {
+                              const Pose2<T>* at = nullptr, const std::uint8_t* rounds = nullptr, int this_round = 0) {
     if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
       return Status::kInvalidInput;
     }
@@ -370,7 +374,7 @@ class Slam {
     const Pose2<T> xr = at != nullptr ? Pose2<T>{at->x, at->y, wrap_angle(at->theta)} : pose();
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const FeatureId f = assoc.feature[i];
-      if (f < 0) continue;
+      if (f < 0 || (rounds != nullptr && rounds[i] != this_round)) continue;
       const int j = index_of(f);
       if (j < 0) return Status::kInvalidInput;
       if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
@@ -632,6 +636,11 @@ class Slam {
     const T w1 = (-(x_[lk + 1] - x_[ld + 1]) - l10 * w0) / l11;
     for (int r = 0; r < n; ++r) {  // <= kMaxState
       if (!std::isfinite(x_[r] + V(r, 0) * w0 + V(r, 1) * w1)) return Status::kNonFinite;
+    }
+    if (!updated_) {  // the pose the next prediction linearises at (FEJ), as update() records it
+      prior_[0] = x_[0];
+      prior_[1] = x_[1];
+      updated_ = true;
     }
     for (int r = 0; r < n; ++r) x_[r] += V(r, 0) * w0 + V(r, 1) * w1;  // <= kMaxState
     x_[2] = wrap_angle(x_[2]);

@@ -81,6 +81,10 @@ class SlamStep {
  public:
   /// Merges of a loop closure's duplicates after one scan's review, at most (loop_merge_d2).
   static constexpr int kMaxMergesPerScan = 4;
+  /// A committed loop closure's pairs are applied in this many rounds, most certain first; each
+  /// round after the first is linearised at the estimate the rounds before it left (an iterated
+  /// update with a bounded number of iterations).
+  static constexpr int kClosureRounds = 3;
 
   /// Builds the strategy's configuration and the augmentation gate.
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
@@ -475,11 +479,17 @@ class SlamStep {
     const Mat3<T> before = slam_.pose_covariance();
     Status st = closing ? slam_.inflate_pose(close_Q_) : Status::kOk;
     if (st != Status::kOk) return st;
-    st = slam_.update(obs, assoc, ekf_ws_, closing ? &close_at_ : nullptr);
+    if (closing) order_closure(obs, assoc);
+    st = slam_.update(obs, assoc, ekf_ws_, closing ? &close_at_ : nullptr, closing ? close_round_.data() : nullptr, 0);
     if (st != Status::kOk) {
       // Undone: the pose block as it was (it was positive definite, the write cannot fail).
       if (closing) (void)slam_.replace_pose_covariance(before);
       return st;
+    }
+    // The closure's later rounds, at the estimate the first left; a round the filter refuses is
+    // skipped (its pairs stay unused), as update() skips a block after its first.
+    for (int r = 1; r < kClosureRounds && closing; ++r) {  // <= kClosureRounds
+      (void)slam_.update(obs, assoc, ekf_ws_, nullptr, close_round_.data(), r);
     }
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
@@ -526,6 +536,34 @@ class SlamStep {
   }
 
  private:
+  /// A committed closure's rounds (commit()): the paired observations ranked by their landmark's
+  /// position variance (trace of its 2x2 block; the landmarks mapped before the drift first), rank k
+  /// of p in round k kClosureRounds / p, the two most certain in the first. Out of line: its loops stay out of commit()'s frame.
+  /// O(kMaxObservations^2)
+  [[gnu::noinline]] void order_closure(const Observations<T, B>& obs, const Association<T, B>& assoc) {
+    std::array<T, B::kMaxObservations> var{};
+    int p = 0;
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      close_round_[static_cast<std::size_t>(i)] = 0;
+      if (j < 0) continue;  // unpaired, or an unknown id that update() refuses
+      const int l = ekf::Layout::landmark(j);
+      var[static_cast<std::size_t>(i)] = slam_.cov(l, l) + slam_.cov(l + 1, l + 1);
+      ++p;
+    }
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      if (assoc.feature[i] < 0 || slam_.index_of(assoc.feature[i]) < 0) continue;
+      int rank = 0;                          // the pairs more certain than i (ties by index)
+      for (int k = 0; k < obs.count; ++k) {  // <= kMaxObservations
+        if (k == i || assoc.feature[k] < 0 || slam_.index_of(assoc.feature[k]) < 0) continue;
+        const T vk = var[static_cast<std::size_t>(k)], vi = var[static_cast<std::size_t>(i)];
+        rank += vk < vi || (vk == vi && k < i);
+      }
+      // The first round takes two pairs at least (a pose needs two points).
+      close_round_[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(rank < 2 ? 0 : rank * kClosureRounds / p);
+    }
+  }
+
   /// Before commit()'s review (loop_merge_d2 > 0): a scan that pairs old landmarks (unpaired for
   /// loop_age reviews, confirmed) is a closure; they become the closure set, each with the reviews
   /// it was unseen plus one (closure_limit_, a landmark added later has at most that age after
@@ -629,6 +667,7 @@ class SlamStep {
   bool closing_ = false;
   Pose2<T> close_at_{};
   Mat3<T> close_Q_ = Mat3<T>::Zero();
+  std::array<std::uint8_t, B::kMaxObservations> close_round_{};  ///< each pair's round (order_closure)
 };
 
 }  // namespace geojcbb::node
