@@ -53,6 +53,8 @@ class Options(TypedDict, total=False):
     confirm_hits: int  # default 2
     max_misses: int  # default 2
     max_tentative_reviews: int  # default 10
+    confirm_min_reviews: int  # default 0
+    tentative_isolated: bool  # default 0
     joint_recheck: bool  # default 1
     ambiguity_margin: float  # default 0
     new_if_candidates_taken: bool  # default 0

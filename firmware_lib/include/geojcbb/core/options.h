@@ -50,6 +50,10 @@
     "misses where expected in view that remove a tentative landmark") \
   X(INT, max_tentative_reviews, 10, (CLOSED, 1, 255), "", "--max-tentative-reviews", \
     "reviews a landmark may stay tentative before it is removed") \
+  X(INT, confirm_min_reviews, 0, (CLOSED, 0, 255), "scans", "--confirm-min-reviews", \
+    "reviews a landmark must also have lived to be confirmed (< max_tentative_reviews): time to catch a mover") \
+  X(BOOL, tentative_isolated, 0, (ANY, 0, 0), "", "--tentative-isolated", \
+    "tentative landmarks are paired after the association, one observation each, and update only themselves") \
   X(BOOL, joint_recheck, 1, (ANY, 0, 0), "", "--joint-recheck", \
     "test the union of the groups' answers jointly and keep its largest jointly compatible subset") \
   X(F64, ambiguity_margin, 0, (ROPEN, 0, 1e6), "", "--ambiguity-margin", \

@@ -106,10 +106,17 @@ struct Info {
   const char* meaning;
 };
 
+// The texts for people (unit, option, meaning) only where something reads them: a device build
+// (GEOJCBB_DOC_TEXT=0, protocol/CMakeLists.txt) keeps them out of flash.
+#ifndef GEOJCBB_DOC_TEXT
+#define GEOJCBB_DOC_TEXT 1
+#endif
 #define GEOJCBB_OPT_RANGE(kind, lo, hi) \
   Range { RangeKind::k##kind, static_cast<double>(lo), static_cast<double>(hi) }
+/// A text for people, or "" in a device build (the literal is then never emitted).
+constexpr const char* doc_text(const char* text) { return GEOJCBB_DOC_TEXT ? text : ""; }
 #define GEOJCBB_OPT_INFO(TYPE, name, def, range, unit, cli, doc) \
-  Info{#TYPE, #name, #def, GEOJCBB_OPT_RANGE range, unit, cli, doc},
+  Info{#TYPE, #name, #def, GEOJCBB_OPT_RANGE range, doc_text(unit), doc_text(cli), doc_text(doc)},
 /// Every option, in the table's order.
 inline constexpr Info kInfo[] = {GEOJCBB_OPTIONS(GEOJCBB_OPT_INFO)};
 #undef GEOJCBB_OPT_INFO

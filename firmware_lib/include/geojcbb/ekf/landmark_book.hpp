@@ -27,16 +27,21 @@ namespace geojcbb::ekf {
 ///                     (l - l0)^T (P0 - P + f I)^-1 (l - l0) > static_gate_d2, with l0 and P0 the
 ///                     landmark's position and covariance when it was added, P its covariance now
 ///                     (for a static point l - l0 has covariance P0 - P) and f = (1 cm)^2.
+/// A landmark also needs `confirm_min_reviews` reviews of life to count as confirmed (confirmed()):
+/// the time in which the static gate can catch a slow mover before it is trusted; it must be less
+/// than max_tentative_reviews, and the tentative rules above apply until then.
 struct LandmarkPolicy {
   int confirm_hits = 2;
   int max_misses = 2;
   int max_tentative_reviews = 10;
   float miss_probability = 0.0f;
   float static_gate_d2 = 0.0f;
+  int confirm_min_reviews = 0;
   bool valid() const {
     return confirm_hits >= 1 && confirm_hits <= 255 && max_misses >= 1 && max_misses <= 255 &&
            max_tentative_reviews >= 1 && max_tentative_reviews <= 255 && miss_probability >= 0.0f &&
-           miss_probability < 1.0f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f;
+           miss_probability < 1.0f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f && confirm_min_reviews >= 0 &&
+           confirm_min_reviews < max_tentative_reviews;
   }
 };
 
@@ -127,6 +132,11 @@ class LandmarkBook {
     return next_id_++;
   }
 
+  /// Landmark j has been paired confirm_hits times and has lived confirm_min_reviews reviews.
+  bool confirmed(int j, const LandmarkPolicy& policy) const {
+    return rec_[j].hits >= policy.confirm_hits && rec_[j].age >= policy.confirm_min_reviews;
+  }
+
   /// Starts a review: no landmark marked for removal, every one a review older.  O(n)
   void start_review() {
     for (int j = 0; j < n_; ++j) {  // <= MaxLandmarks
@@ -167,7 +177,7 @@ class LandmarkBook {
         continue;
       }
       if (r.age < 255) ++r.age;
-      if (r.hits < policy.confirm_hits) {
+      if (!confirmed(j, policy)) {
         if (r.misses >= policy.max_misses || r.age >= policy.max_tentative_reviews) continue;
       }
       keep[kept++] = static_cast<std::int16_t>(j);

@@ -97,6 +97,7 @@ struct FilterOptions {
 struct LocalMapStats {
   int in_region = 0;       ///< landmarks within the radius
   bool truncated = false;  ///< more than MaxCandidates were: the nearest were kept
+  int confirmed = 0;       ///< the leading candidates that are confirmed (all, unless asked to sort them)
 };
 
 template <typename T, class B>
@@ -229,6 +230,11 @@ class Slam {
   int unseen(int j) const { return book_[j].unseen; }
   /// Reviews since landmark j was added (saturating at 255).
   int age(int j) const { return book_[j].age; }
+  /// Landmark j fails the static gate (LandmarkPolicy::static_gate_d2 = gate_d2): the review
+  /// will remove it as moved if it is paired.
+  bool has_moved(int j, T gate_d2) const { return gate_d2 > T(0) && moved(j, gate_d2); }
+  /// Landmark j is confirmed under `policy` (LandmarkBook::confirmed: hits and age).
+  bool confirmed(int j, const LandmarkPolicy& policy) const { return book_.confirmed(j, policy); }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   int index_of(FeatureId id) const { return book_.index_of(id); }
   int dim() const { return Layout::landmark(landmarks()); }
@@ -292,10 +298,12 @@ class Slam {
 
   /// The association input for the current scan: the landmarks with predicted range < radius_m
   /// (r + d, eq. 5), nearest first and at most MaxCandidates, with their stable ids, predicted
-  /// measurements h and C = H P H^T.
+  /// measurements h and C = H P H^T. With `confirmed_first` (a policy), the confirmed landmarks
+  /// come first (each part nearest first): the first `stats.confirmed` candidates are a prediction
+  /// of their own (C's leading blocks), the ones after them tentative.
   /// @return kOk; kInvalidInput for a radius that is not positive and finite.
-  [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out,
-                                     LocalMapStats& stats) const {
+  [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out, LocalMapStats& stats,
+                                     const LandmarkPolicy* confirmed_first = nullptr) const {
     if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
     auto& idx = ws.cand;
     auto& rng = ws.cand_range;
@@ -322,6 +330,20 @@ class Slam {
       }
       rng[k] = r;
       idx[k] = static_cast<std::uint16_t>(j);
+    }
+    stats.confirmed = n;
+    if (confirmed_first != nullptr) {  // stable partition, the confirmed first
+      std::uint16_t tentative[B::kMaxCandidates];
+      int c = 0, t = 0;
+      for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
+        if (book_.confirmed(idx[a], *confirmed_first)) {
+          idx[c++] = idx[a];
+        } else {
+          tentative[t++] = idx[a];
+        }
+      }
+      for (int a = 0; a < t; ++a) idx[c + a] = tentative[a];  // <= kMaxCandidates
+      stats.confirmed = c;
     }
     const Status sized = out.C.resize(n);  // n <= kMaxCandidates by the insertion above
     if (sized != Status::kOk) return sized;
@@ -504,6 +526,70 @@ class Slam {
       x_[2] = wrap_angle(x_[2]);
       P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
     }
+    return Status::kOk;
+  }
+
+  /// One observation z (noise R) of landmark j that moves only that landmark (a tentative one,
+  /// node::SlamStep with tentative_isolated): a Schmidt (consider) update. S = H P H^T + R counts
+  /// the pose's and the other landmarks' uncertainty, but the gain is kept only in landmark j's
+  /// rows, K_l = P_l. H^T S^-1: x_l += K_l nu, P_ll -= K_l S K_l^T, P_lo -= K_l (H P)_o for every
+  /// other row o; the pose and every other landmark keep their mean and their covariance among
+  /// themselves. (I - K H) P (I - K H)^T + K R K^T with that K reduces to exactly this, so P stays
+  /// positive semi-definite. Jacobians at the landmark's first estimate (FEJ), as update().
+  /// @param ws       scratch (its V: P H^T)
+  /// @param[out] d2  the pair's nu^T S^-1 nu
+  /// @return kOk; kInvalidInput for an index out of range; kNonFinite; kNotPositiveDefinite for R,
+  ///         for S or for a landmark block that rounding would leave not positive definite. No
+  ///         state changes unless kOk.  O(n)
+  [[nodiscard, gnu::noinline, gnu::cold]] Status update_alone(int j, const Vec2<T>& z, const Mat2<T>& R,
+                                                              SlamWorkspace<T, B>& ws, T& d2) {
+    if (j < 0 || j >= landmarks()) return Status::kInvalidInput;
+    if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
+    if (!is_spd(R)) return Status::kNotPositiveDefinite;
+    const int n = dim(), l = Layout::landmark(j);
+    Mat23<T> Hp;
+    Mat2<T> Hl;
+    const Pose2<T> xr = pose();
+    const Vec2<T> nu = innovation(z, observe(xr, landmark(j)));
+    observe(xr, linearisation_point(j), &Hp, &Hl);
+    // A = P H^T (n x 2), in the update's scratch (its first two columns).
+    constexpr int K = kUpdateBlockCols;
+    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
+    for (int r = 0; r < n; ++r) {  // <= kMaxState
+      for (int u = 0; u < 2; ++u) {
+        V(r, u) = Hp(u, 0) * cov(r, 0) + Hp(u, 1) * cov(r, 1) + Hp(u, 2) * cov(r, 2) + Hl(u, 0) * cov(r, l) +
+                  Hl(u, 1) * cov(r, l + 1);
+      }
+    }
+    Mat2<T> S;
+    for (int u = 0; u < 2; ++u) {
+      for (int v = 0; v < 2; ++v) {
+        S(u, v) = Hp(u, 0) * V(0, v) + Hp(u, 1) * V(1, v) + Hp(u, 2) * V(2, v) + Hl(u, 0) * V(l, v) +
+                  Hl(u, 1) * V(l + 1, v) + R(u, v);
+      }
+    }
+    S = symmetric_part(S);
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(S(0, 0) > T(0)) || !(det > T(0)) || !std::isfinite(det)) return Status::kNotPositiveDefinite;
+    Mat2<T> Si;
+    Si << S(1, 1) / det, -S(0, 1) / det, -S(1, 0) / det, S(0, 0) / det;
+    // K_l = (A's rows l, l + 1) S^-1; K_l S K_l^T = A_l S^-1 A_l^T.
+    Mat2<T> Al;
+    Al << V(l, 0), V(l, 1), V(l + 1, 0), V(l + 1, 1);
+    const Mat2<T> Kl = Al * Si;
+    const Mat2<T> Pll = symmetric_part(Mat2<T>(P_.template block<2, 2>(l, l) - Kl * Al.transpose()));
+    const Vec2<T> xl = landmark(j) + Kl * nu;
+    if (!xl.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+    if (!spd_block(Pll)) return Status::kNotPositiveDefinite;
+    d2 = nu.dot(Si * nu);
+    // P_lo -= K_l (H P)_o = K_l A_o^T for every other row o (A_o: row o of P H^T).
+    for (int o = 0; o < n; ++o) {  // <= kMaxState
+      if (o == l || o == l + 1) continue;
+      for (int u = 0; u < 2; ++u) P_.at(l + u, o) -= Kl(u, 0) * V(o, 0) + Kl(u, 1) * V(o, 1);
+    }
+    P_.set_sym(l, Pll);
+    x_[l] = xl.x();
+    x_[l + 1] = xl.y();
     return Status::kOk;
   }
 

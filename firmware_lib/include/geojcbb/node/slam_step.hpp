@@ -85,6 +85,17 @@ class SlamStep {
   /// round after the first is linearised at the estimate the rounds before it left (an iterated
   /// update with a bounded number of iterations).
   static constexpr int kClosureRounds = 3;
+  /// commit(): the round of a pair with a tentative landmark (tentative_isolated), in no update round.
+  static constexpr std::uint8_t kAlone = 255;
+  /// Movers remembered (tentative_isolated): landmarks the static gate removes as moved, and
+  /// tentative landmarks that jumped (paired on the last scan, their nearest sighting now outside
+  /// the pairing gate but inside the augmentation gate). An observation the association made new
+  /// within kMoverReach_m of one is the mover again: it is left unmatched (no landmark is made of
+  /// it, no tentative landmark there is paired) and the mover follows it. A mover unseen for
+  /// kMoverMemoryScans reviews is forgotten; a new one replaces the longest unseen.
+  static constexpr int kMaxMovers = 4;
+  static constexpr int kMoverMemoryScans = 50;
+  static constexpr T kMoverReach_m = T(1);
 
   /// Builds the strategy's configuration and the augmentation gate.
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
@@ -100,8 +111,12 @@ class SlamStep {
       st = chi2_inv(s.static_gate_level, 2, static_gate);
       if (st != Status::kOk) return st;
     }
-    const ekf::LandmarkPolicy policy{s.confirm_hits, s.max_misses, s.max_tentative_reviews, s.miss_probability,
-                                     static_cast<float>(static_gate)};
+    const ekf::LandmarkPolicy policy{s.confirm_hits,
+                                     s.max_misses,
+                                     s.max_tentative_reviews,
+                                     s.miss_probability,
+                                     static_cast<float>(static_gate),
+                                     s.confirm_min_reviews};
     if (!policy.valid()) return Status::kInvalidInput;
     reloc::AlignOptions<T> align;
     align.base_pairs = s.reloc_base_pairs;
@@ -140,6 +155,8 @@ class SlamStep {
       failed_scans_ = 0;
       merge_left_ = 0;
       closure_count_ = 0;
+      mover_count_ = 0;
+      movers_caught_ = 0;
     }
     return st;
   }
@@ -153,6 +170,10 @@ class SlamStep {
     if (configured_ && cfg_.relocalise) state_ = Localisation::kLost;
   }
   Localisation localisation() const { return state_; }
+  /// Landmarks removed as movers and remembered (tentative_isolated) since reset().
+  std::uint32_t movers_caught() const { return movers_caught_; }
+  /// Movers remembered now (tentative_isolated; at most kMaxMovers).
+  int movers() const { return mover_count_; }
 
   /// A landmark known beforehand (ekf::Slam::add_known_landmark), after reset().
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
@@ -183,7 +204,7 @@ class SlamStep {
     st = prepare(local);
     if (st != Status::kOk) return st;
     const std::uint32_t t1 = clock ? clock() : 0;
-    st = associate(obs, pred_, cfg_, ws_, assoc_);
+    st = associate_prepared(obs, assoc_);
     if (st != Status::kOk) return st;
     const std::uint32_t t2 = clock ? clock() : 0;
     reloc::LoopStats<T> ls;
@@ -457,13 +478,28 @@ class SlamStep {
   /// reads it, commit() updates, augments and reviews with the given association.
   [[nodiscard]] Status prepare(ekf::LocalMapStats& local) {
     if (!configured_) return Status::kInvalidInput;
-    return slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local);
+    const Status st =
+        slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local, cfg_.tentative_isolated ? &policy_ : nullptr);
+    confirmed_ = st == Status::kOk ? local.confirmed : 0;
+    return st;
   }
   const Prediction<T, B>& prediction() const { return pred_; }
   /// The configured association on the prepared prediction (what step() runs between the halves).
+  /// With tentative_isolated, the association sees only the confirmed landmarks, and the
+  /// tentative ones are paired afterwards (pair_tentative).
   [[nodiscard]] Status associate_prepared(const Observations<T, B>& obs, Association<T, B>& out) {
     if (!configured_) return Status::kInvalidInput;
-    return associate(obs, pred_, cfg_, ws_, out);
+    if (!cfg_.tentative_isolated) return associate(obs, pred_, cfg_, ws_, out);
+    const int all = pred_.count;
+    pred_.count = confirmed_;  // the leading candidates: C's leading blocks are their own C
+    Status st = pred_.C.resize(confirmed_);
+    if (st == Status::kOk) st = associate(obs, pred_, cfg_, ws_, out);
+    pred_.count = all;
+    (void)pred_.C.resize(all);  // all <= kMaxCandidates: it held all before
+    if (st != Status::kOk) return st;
+    pair_tentative(obs, out);
+    follow_movers(obs, out);
+    return Status::kOk;
   }
   T augmentation_gate() const { return gate_; }
 
@@ -480,7 +516,9 @@ class SlamStep {
     Status st = closing ? slam_.inflate_pose(close_Q_) : Status::kOk;
     if (st != Status::kOk) return st;
     if (closing) order_closure(obs, assoc);
-    st = slam_.update(obs, assoc, ekf_ws_, closing ? &close_at_ : nullptr, closing ? close_round_.data() : nullptr, 0);
+    const bool aside = cfg_.tentative_isolated && set_aside_tentative(obs, assoc, closing);
+    const bool rounds = closing || aside;
+    st = slam_.update(obs, assoc, ekf_ws_, closing ? &close_at_ : nullptr, rounds ? round_.data() : nullptr, 0);
     if (st != Status::kOk) {
       // Undone: the pose block as it was (it was positive definite, the write cannot fail).
       if (closing) (void)slam_.replace_pose_covariance(before);
@@ -489,8 +527,9 @@ class SlamStep {
     // The closure's later rounds, at the estimate the first left; a round the filter refuses is
     // skipped (its pairs stay unused), as update() skips a block after its first.
     for (int r = 1; r < kClosureRounds && closing; ++r) {  // <= kClosureRounds
-      (void)slam_.update(obs, assoc, ekf_ws_, nullptr, close_round_.data(), r);
+      (void)slam_.update(obs, assoc, ekf_ws_, nullptr, round_.data(), r);
     }
+    if (aside) update_tentative(obs, assoc);
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
     out.count = obs.count;
@@ -520,6 +559,7 @@ class SlamStep {
     // landmarks it re-pairs, each with how long it was unseen, for the merges of its duplicates
     // after this scan's review and the next kLoopSettleScans - 1.
     if (cfg_.loop_merge_d2 > T(0)) note_closure(assoc);
+    if (cfg_.tentative_isolated) catch_movers(assoc);
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above.
     if (slam_.review(pred_, assoc, view_, policy_, rs) != Status::kOk) rs = ekf::ReviewStats{};
@@ -545,7 +585,7 @@ class SlamStep {
     int p = 0;
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
-      close_round_[static_cast<std::size_t>(i)] = 0;
+      round_[static_cast<std::size_t>(i)] = 0;
       if (j < 0) continue;  // unpaired, or an unknown id that update() refuses
       const int l = ekf::Layout::landmark(j);
       var[static_cast<std::size_t>(i)] = slam_.cov(l, l) + slam_.cov(l + 1, l + 1);
@@ -560,7 +600,163 @@ class SlamStep {
         rank += vk < vi || (vk == vi && k < i);
       }
       // The first round takes two pairs at least (a pose needs two points).
-      close_round_[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(rank < 2 ? 0 : rank * kClosureRounds / p);
+      round_[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(rank < 2 ? 0 : rank * kClosureRounds / p);
+    }
+  }
+
+  /// associate_prepared() with tentative_isolated: each observation the association made new is
+  /// offered to the tentative landmarks of the prediction (the candidates after the confirmed
+  /// ones), each of which takes one observation at most: the pair of smallest individual d2 first,
+  /// within the individual gate, until none is left. An unpaired observation's d2 (the augmentation
+  /// gate's) becomes the smallest to any candidate, tentative ones included. Out of line: its flags
+  /// stay out of the callers' frames.  O(kMaxObservations^2 kMaxCandidates)
+  [[gnu::noinline, gnu::cold]] void pair_tentative(const Observations<T, B>& obs, Association<T, B>& out) {
+    bool taken[B::kMaxCandidates] = {};
+    for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates: a mover's stale landmark
+      const int j = slam_.index_of(pred_.id[a]);
+      taken[a] = j < 0 || near_mover(slam_.landmark(j));
+    }
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations: the nearest tentative landmark
+      if (out.feature[i] != kNewFeature) continue;
+      for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates
+        out.d2[i] = std::min(out.d2[i], tentative_d2(obs, i, a));
+      }
+    }
+    for (int round = 0; round < obs.count; ++round) {  // <= kMaxObservations: one pair each
+      int bi = -1, ba = -1;
+      T best = cfg_.gate.individual;
+      for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+        if (out.feature[i] != kNewFeature) continue;
+        for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates
+          if (taken[a]) continue;
+          const T d2 = tentative_d2(obs, i, a);
+          if (d2 <= best) {
+            best = d2;
+            bi = i;
+            ba = a;
+          }
+        }
+      }
+      if (bi < 0) break;
+      taken[ba] = true;
+      out.feature[bi] = pred_.id[ba];
+      out.candidate[bi] = static_cast<std::int16_t>(ba);
+      out.d2[bi] = best;
+      ++out.pairings;
+    }
+    // A tentative landmark paired on the last scan whose nearest sighting now falls outside the
+    // pairing gate but inside the augmentation gate has jumped: a mover (the sighting is it).
+    const Pose2<T> x = slam_.pose();
+    for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates
+      const int j = slam_.index_of(pred_.id[a]);
+      if (taken[a] || j < 0 || slam_.unseen(j) != 0) continue;
+      int bi = -1;
+      T best = std::numeric_limits<T>::infinity();
+      for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+        if (out.feature[i] != kNewFeature) continue;
+        const T d2 = tentative_d2(obs, i, a);
+        if (d2 < best) {
+          best = d2;
+          bi = i;
+        }
+      }
+      if (bi < 0 || !(best > cfg_.gate.individual) || !(best <= gate_)) continue;
+      out.feature[bi] = kUnmatched;
+      remember_mover(inverse_observe(x, obs.z[bi]));
+    }
+  }
+  /// A point within kMoverReach_m of a remembered mover.
+  bool near_mover(const Vec2<T>& p) const {
+    for (int k = 0; k < mover_count_; ++k) {  // <= kMaxMovers
+      if ((p - movers_[static_cast<std::size_t>(k)].at).norm() < kMoverReach_m) return true;
+    }
+    return false;
+  }
+  /// A mover caught at p; when kMaxMovers are remembered, the longest unseen makes room.
+  [[gnu::noinline, gnu::cold]] void remember_mover(const Vec2<T>& p) {
+    int slot = mover_count_;
+    if (slot == kMaxMovers) {
+      slot = 0;
+      for (int k = 1; k < kMaxMovers; ++k) {  // <= kMaxMovers
+        if (movers_[static_cast<std::size_t>(k)].unseen > movers_[static_cast<std::size_t>(slot)].unseen) slot = k;
+      }
+    } else {
+      ++mover_count_;
+    }
+    movers_[static_cast<std::size_t>(slot)] = Mover{p, 0};
+    ++movers_caught_;
+  }
+  /// associate_prepared() with tentative_isolated, after pair_tentative: an observation still new
+  /// within kMoverReach_m of a remembered mover (where the pose puts it) is that mover: unmatched,
+  /// and the mover moves there.  O(kMaxObservations kMaxMovers)
+  [[gnu::noinline, gnu::cold]] void follow_movers(const Observations<T, B>& obs, Association<T, B>& out) {
+    const Pose2<T> x = slam_.pose();
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      if (out.feature[i] != kNewFeature) continue;
+      const Vec2<T> p = inverse_observe(x, obs.z[i]);
+      for (int k = 0; k < mover_count_; ++k) {  // <= kMaxMovers
+        Mover& mv = movers_[static_cast<std::size_t>(k)];
+        if ((p - mv.at).norm() < kMoverReach_m) {
+          out.feature[i] = kUnmatched;
+          mv.at = p;
+          mv.unseen = 0;
+          break;
+        }
+      }
+    }
+  }
+  /// commit() with tentative_isolated, before the review: a paired landmark that fails the static
+  /// gate (the review removes it) is remembered as a mover; every mover a scan older, the ones
+  /// unseen for kMoverMemoryScans forgotten.  O(kMaxObservations kMaxMovers)
+  [[gnu::noinline, gnu::cold]] void catch_movers(const Association<T, B>& assoc) {
+    int kept = 0;
+    for (int k = 0; k < mover_count_; ++k) {  // <= kMaxMovers
+      Mover mv = movers_[static_cast<std::size_t>(k)];
+      if (++mv.unseen >= kMoverMemoryScans) continue;
+      movers_[static_cast<std::size_t>(kept++)] = mv;
+    }
+    mover_count_ = kept;
+    const T gate = T(policy_.static_gate_d2);
+    for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      if (j >= 0 && slam_.has_moved(j, gate)) remember_mover(slam_.landmark(j));
+    }
+  }
+  /// Observation i against candidate a alone: nu^T (C_aa + R_i)^-1 nu (infinity when not definite).
+  T tentative_d2(const Observations<T, B>& obs, int i, int a) const {
+    const Mat2<T> S = pred_.C.block(a, a) + obs.R[i];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0)) || !(S(0, 0) > T(0))) return std::numeric_limits<T>::infinity();
+    const Vec2<T> nu = innovation(obs.z[i], pred_.h[a]);
+    const T d2 = (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
+    return std::isfinite(d2) ? d2 : std::numeric_limits<T>::infinity();
+  }
+  /// commit() with tentative_isolated: the pairs with a tentative landmark are set aside from the
+  /// filter's update (round kAlone) and the others go in round 0 (unless a closure ordered them).
+  /// @return whether any pair was set aside
+  [[gnu::noinline, gnu::cold]] bool set_aside_tentative(const Observations<T, B>& obs, const Association<T, B>& assoc,
+                                                        bool closing) {
+    bool any = false;
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      const bool alone = j >= 0 && !slam_.confirmed(j, policy_);
+      if (alone) {
+        round_[static_cast<std::size_t>(i)] = kAlone;
+      } else if (!closing) {
+        round_[static_cast<std::size_t>(i)] = 0;
+      }
+      any = any || alone;
+    }
+    return any;
+  }
+  /// commit()'s pairs set aside (kAlone): each moves only its tentative landmark
+  /// (ekf::Slam::update_alone), after the filter's update; one the filter refuses is skipped.
+  [[gnu::noinline, gnu::cold]] void update_tentative(const Observations<T, B>& obs, const Association<T, B>& assoc) {
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      if (round_[static_cast<std::size_t>(i)] != kAlone) continue;
+      const int j = slam_.index_of(assoc.feature[i]);
+      T d2 = T(0);
+      if (j >= 0) (void)slam_.update_alone(j, obs.z[i], obs.R[i], ekf_ws_, d2);
     }
   }
 
@@ -667,7 +863,16 @@ class SlamStep {
   bool closing_ = false;
   Pose2<T> close_at_{};
   Mat3<T> close_Q_ = Mat3<T>::Zero();
-  std::array<std::uint8_t, B::kMaxObservations> close_round_{};  ///< each pair's round (order_closure)
+  /// Each pair's round in commit(): a closure's (order_closure), or kAlone (set_aside_tentative).
+  std::array<std::uint8_t, B::kMaxObservations> round_{};
+  int confirmed_ = 0;  ///< prepare(): the leading candidates of pred_ that are confirmed (tentative_isolated)
+  struct Mover {
+    Vec2<T> at;      ///< where it was last seen (world) [m]
+    int unseen = 0;  ///< reviews since
+  };
+  std::array<Mover, kMaxMovers> movers_{};
+  int mover_count_ = 0;
+  std::uint32_t movers_caught_ = 0;  ///< since reset()
 };
 
 }  // namespace geojcbb::node

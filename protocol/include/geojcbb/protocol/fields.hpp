@@ -18,6 +18,13 @@
 #include <utility>
 
 #include "geojcbb/protocol/error.hpp"
+
+// The descriptors' texts for people (units, notes) are for the docs and the host's tools only; a
+// device build (GEOJCBB_DOC_TEXT=0, set for cross builds by protocol/CMakeLists.txt) keeps them out
+// of flash. Neither is part of the schema text, so the schema hash is the same either way.
+#ifndef GEOJCBB_DOC_TEXT
+#define GEOJCBB_DOC_TEXT 1
+#endif
 #include "geojcbb/protocol/frame.hpp"
 #include "geojcbb/protocol/wire.hpp"
 
@@ -155,25 +162,28 @@ template <std::size_t N>
 struct IsFloatArray<std::array<float, N>> : std::true_type {};
 }  // namespace detail
 
+/// A text for people, or "" in a device build (the literal is then never emitted).
+constexpr const char* doc_text(const char* text) { return GEOJCBB_DOC_TEXT ? text : ""; }
+
 template <class R, class T>
 constexpr Field<R, T> field(const char* name, T R::*member, Range r = range::any(), const char* unit = "",
                             const char* note = "") {
   static_assert(!detail::IsFloatArray<T>::value,
                 "an array of floats names its elements: field(name, member, range, unit, note, names)");
-  return Field<R, T>{name, member, r, unit, note, nullptr};
+  return Field<R, T>{name, member, r, doc_text(unit), doc_text(note), nullptr};
 }
 /// An array of floats: N f32 on the wire, each with its own name (p00 ... p22).
 template <class R, std::size_t N>
 constexpr Field<R, std::array<float, N>> field(const char* name, std::array<float, N> R::*member, Range r,
                                                const char* unit, const char* note, const char* const (&elem_names)[N]) {
-  return Field<R, std::array<float, N>>{name, member, r, unit, note, elem_names};
+  return Field<R, std::array<float, N>>{name, member, r, doc_text(unit), doc_text(note), elem_names};
 }
 template <class R, class C, class Item, std::size_t N>
 constexpr List<R, C, Item, N> list(const char* name, C R::*count, std::array<Item, N> R::*items, const char* items_name,
                                    const char* note = "") {
   static_assert(std::is_same_v<C, std::uint8_t>, "a list's count is a u8");
   static_assert(N >= 1 && N <= 255, "count is a u8");
-  return List<R, C, Item, N>{name, count, items, items_name, note};
+  return List<R, C, Item, N>{name, count, items, items_name, doc_text(note)};
 }
 
 namespace detail {

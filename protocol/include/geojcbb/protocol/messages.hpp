@@ -181,6 +181,8 @@ struct Config : Codec<Config> {
   std::uint8_t confirm_hits = 2;            ///< hits that confirm a tentative landmark, >= 1
   std::uint8_t max_misses = 2;              ///< misses in view that remove a tentative landmark, >= 1
   std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
+  std::uint8_t confirm_min_reviews = 0;     ///< reviews a landmark must have lived to be confirmed
+  bool tentative_isolated = false;          ///< tentative landmarks paired apart, updating only themselves
   bool joint_recheck = true;
   float ambiguity_margin = 0.0f;  ///< >= 0 (0: off)
   bool new_if_candidates_taken = false;
@@ -245,6 +247,10 @@ struct Config : Codec<Config> {
               "misses in view that remove a tentative landmark"),
         field("max_tentative_reviews", &Config::max_tentative_reviews, range::at_least(1), "",
               "reviews a landmark may stay tentative"),
+        field("confirm_min_reviews", &Config::confirm_min_reviews, range::any(), "scans",
+              "reviews a landmark must have lived to be confirmed"),
+        field("tentative_isolated", &Config::tentative_isolated, range::one_of(0, 1), "",
+              "tentative landmarks paired apart, updating only themselves"),
         field("joint_recheck", &Config::joint_recheck, range::one_of(0, 1)),
         field("ambiguity_margin", &Config::ambiguity_margin, range::not_below(0.0f), "", "0: off"),
         field("new_if_candidates_taken", &Config::new_if_candidates_taken, range::one_of(0, 1)),
@@ -705,7 +711,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 129 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 131 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
