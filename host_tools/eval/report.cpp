@@ -30,6 +30,8 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   fp_clutter += r.fp_clutter;
   fp_to_duplicate += r.fp_to_duplicate;
   fp_to_original += r.fp_to_original;
+  fp_in_group += r.fp_in_group;
+  fp_other_group += r.fp_other_group;
   runs_over_5_fp += r.score.fp > 5;
   loop_commits += r.loop_commits;
   loop_held_scans += r.loop_held_scans;
@@ -93,6 +95,8 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.reloc_false = reloc_false;
   row.fp_to_duplicate = fp_to_duplicate;
   row.fp_to_original = fp_to_original;
+  row.fp_in_group = fp_in_group;
+  row.fp_other_group = fp_other_group;
   row.runs_over_5_fp = runs_over_5_fp;
   row.loop_commits = loop_commits;
   row.loop_held_scans = loop_held_scans;

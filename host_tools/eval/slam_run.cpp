@@ -49,6 +49,7 @@ void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId
       res_.fp_clutter += t < 0;
       if (t >= 0 && ft >= 0 && ft != t)
         ++(f > first_[static_cast<std::size_t>(ft)] ? res_.fp_to_duplicate : res_.fp_to_original);
+      if (t >= 0 && ft != t) ++((ft >= 0 && cls(ft) == cls(t)) ? res_.fp_in_group : res_.fp_other_group);
       ++((t >= 0 && ft >= 0 && cls(ft) == cls(t)) ? res_.group_score.tp : res_.group_score.fp);
     } else if (known) {
       ++res_.score.fn;

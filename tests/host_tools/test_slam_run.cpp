@@ -53,3 +53,26 @@ TEST_CASE("with noise and clutter: each observation is scored once, and a seed r
   CHECK(a.spurious_in_map * 10 < a.spurious_landmarks);
   CHECK(a.removed_spurious_landmarks + a.spurious_in_map == a.spurious_landmarks);
 }
+
+TEST_CASE("scorer: a false pair is counted by place, within the observed landmark's group or elsewhere") {
+  // True landmarks 0 and 1 form a group (a row), 2 is alone. Map ids 0, 1, 2 from true 0, 1, 2;
+  // id 3 from clutter.
+  RunScorer sc(3, {0, 0, 1});
+  sc.added(0, 0);
+  sc.added(1, 1);
+  sc.added(2, 2);
+  sc.added(3, -1);
+  // Observations of true 0 paired with: 1 (its neighbour), 2 (another group), 3 (clutter's landmark),
+  // 0 (right); clutter paired with 0; true 1 not paired.
+  sc.score({0, 0, 0, 0, -1, 1}, {1, 2, 3, 0, 0, -1});
+  const RunResult& r = sc.result();
+  CHECK(r.score.tp == 1);
+  CHECK(r.score.fp == 4);
+  CHECK(r.score.fn == 1);
+  CHECK(r.fp_clutter == 1);
+  CHECK(r.fp_to_original == 2);
+  CHECK(r.fp_in_group == 1);
+  CHECK(r.fp_other_group == 2);
+  CHECK(r.group_score.tp == 2);  // the neighbour is right at group level
+  CHECK(r.group_score.fp == 3);
+}

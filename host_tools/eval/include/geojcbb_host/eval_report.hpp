@@ -38,6 +38,7 @@ struct ReportRow {
   int reloc_runs = 0, reloc_found3 = 0;                ///< kidnap scenes: runs, and runs relocalised within 3 scans
   int reloc_false = 0;                                 ///< runs with a false relocalisation
   int fp_to_duplicate = 0, fp_to_original = 0;         ///< false pairs to a duplicate / to an original landmark
+  int fp_in_group = 0, fp_other_group = 0;             ///< false pairs of a landmark: within its group / elsewhere
   int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
   int merges = 0;                                      ///< duplicates merged after closures (loop_merge_d2)
@@ -133,17 +134,20 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   if (scores) {
     std::fprintf(f, "Table 2: association accuracy (sums over the runs)\n");
     print_accuracy(rows, f);
-    std::fprintf(f,
-                 "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
-                 "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
-                 "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
-                 "duplicates merged\n");
-    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s\n", "strategy", "runs > 5", "duplicate", "original",
-                 "clutter", "closures", "held", "merged");
+    std::fprintf(
+        f,
+        "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
+        "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
+        "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
+        "duplicates merged; a landmark's false pairs by place: another landmark of its group (MRCLAM: within a row of "
+        "tubes) or elsewhere\n");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s %9s %10s\n", "strategy", "runs > 5", "duplicate",
+                 "original", "clutter", "closures", "held", "merged", "in group", "elsewhere");
     for (const ReportRow& r : rows) {
       if (r.runs > 0)
-        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d\n", r.name.c_str(), r.runs_over_5_fp, r.fp_to_duplicate,
-                     r.fp_to_original, r.fp_clutter, r.loop_commits, r.loop_held_scans, r.merges);
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d %9d %10d\n", r.name.c_str(), r.runs_over_5_fp,
+                     r.fp_to_duplicate, r.fp_to_original, r.fp_clutter, r.loop_commits, r.loop_held_scans, r.merges,
+                     r.fp_in_group, r.fp_other_group);
     }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
@@ -207,6 +211,8 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"landmarks_merged", r.merges},
                  {"false_pairs_to_duplicate", r.fp_to_duplicate},
                  {"false_pairs_to_original", r.fp_to_original},
+                 {"false_pairs_in_group", r.fp_in_group},
+                 {"false_pairs_other_group", r.fp_other_group},
                  {"pose_error_after_kidnap_m", num(r.reloc_error_m)},
                  {"anees_before_kidnap", num(r.reloc_anees_before)},
                  {"anees_after_kidnap", num(r.reloc_anees_after)}});

@@ -27,6 +27,7 @@ struct RunAggregate {
   int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
   int reloc_false = 0;                              ///< runs with a false relocalisation
   int fp_to_duplicate = 0, fp_to_original = 0;      ///< RunResult's, summed
+  int fp_in_group = 0, fp_other_group = 0;          ///< RunResult's, summed
   int runs_over_5_fp = 0;                           ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;        ///< RunResult's, summed
   int merges = 0;                                   ///< RunResult's, summed

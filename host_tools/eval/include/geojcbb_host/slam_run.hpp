@@ -133,6 +133,10 @@ struct RunResult {
   /// that map landmark is a duplicate (made after the first one of its identity, e.g. during a
   /// drift), or the first (the original) of its identity.
   int fp_to_duplicate = 0, fp_to_original = 0;
+  /// The same FP (and those paired with a landmark made from clutter) by where the map landmark is:
+  /// another true landmark of the observed one's group (MRCLAM: a neighbour in a row of tubes), or
+  /// elsewhere (another group, or clutter's). Without groups every one is elsewhere.
+  int fp_in_group = 0, fp_other_group = 0;
   int landmarks = 0;                   ///< mapped at the end
   int spurious_landmarks = 0;          ///< augmented from clutter (over the run)
   int spurious_in_map = 0;             ///< made from clutter and still mapped at the end
