@@ -154,8 +154,8 @@ class Slam {
   /// At[i] = A_i^T (2x3) and lm[i] (a landmark index) for i < pairs.  O(n pairs + pairs^2)
   /// @return as relocalise(); kInvalidInput for pairs or an index out of range. Nothing changes
   ///         unless kOk.
-  [[nodiscard]] Status relocalise_fitted(const Pose2<T>& x, const Mat3<T>& Pobs, int pairs, const std::int16_t* lm,
-                                         const Mat23<T>* At) {
+  [[nodiscard, gnu::cold]] Status relocalise_fitted(const Pose2<T>& x, const Mat3<T>& Pobs, int pairs,
+                                                    const std::int16_t* lm, const Mat23<T>* At) {
     const Status s = check_pose_prior(x, Pobs);
     if (s != Status::kOk) return s;
     if (pairs < 0 || pairs > B::kMaxObservations) return Status::kInvalidInput;

@@ -256,7 +256,7 @@ int exclusive_inliers(AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate
 /// Weighted 2-D Procrustes (rotation only) of the picked pairs: the pose minimising
 /// sum w_i |R q_i + t - m_i|^2, w_i = 1 / tr(S_i + P_i). Needs >= 2 pairs.
 template <typename T, class B>
-Pose2<T> procrustes(const AlignWorkspace<T, B>& ws, int m) {
+[[gnu::cold]] Pose2<T> procrustes(const AlignWorkspace<T, B>& ws, int m) {
   T sw = T(0);
   Vec2<T> qc = Vec2<T>::Zero(), mc = Vec2<T>::Zero();
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
@@ -327,7 +327,7 @@ bool gauss_newton_step(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<
 /// Map landmarks the sensor would see from pose x (view.max_range_m > 0) that no picked pair
 /// holds: the misses of the set likelihood. Bound: n.
 template <typename T, class B>
-int misses(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& opt) {
+[[gnu::cold]] int misses(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& opt) {
   int expected = 0;
   for (int j = 0; j < ws.n; ++j) {  // <= kMaxLandmarks
     const Vec2<T> z = observe(x, ws.m[j]);
@@ -398,8 +398,8 @@ int fit_sensitivities(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, 
 /// @return kOk (out written, accepted or not); kInvalidInput for bad options; the statuses of
 ///         validate_observations. Nothing is written to `out` unless kOk.
 template <typename T, class B>
-[[nodiscard]] Status align(const Observations<T, B>& obs, const AlignOptions<T>& opt, AlignWorkspace<T, B>& ws,
-                           AlignResult<T, B>& out) {
+[[nodiscard, gnu::cold]] Status align(const Observations<T, B>& obs, const AlignOptions<T>& opt,
+                                      AlignWorkspace<T, B>& ws, AlignResult<T, B>& out) {
   using namespace align_detail;
   if (!opt.valid()) return Status::kInvalidInput;
   Status st = validate_observations(obs);
