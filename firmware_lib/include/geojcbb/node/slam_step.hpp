@@ -17,6 +17,7 @@
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/reloc/align.hpp"
 #include "geojcbb/reloc/loop.hpp"
 
@@ -619,7 +620,7 @@ class SlamStep {
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations: the nearest tentative landmark
       if (out.feature[i] != kNewFeature) continue;
       for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates
-        out.d2[i] = std::min(out.d2[i], tentative_d2(obs, i, a));
+        out.d2[i] = std::min(out.d2[i], individual_d2(obs, pred_, i, a));
       }
     }
     for (int round = 0; round < obs.count; ++round) {  // <= kMaxObservations: one pair each
@@ -629,7 +630,7 @@ class SlamStep {
         if (out.feature[i] != kNewFeature) continue;
         for (int a = confirmed_; a < pred_.count; ++a) {  // <= kMaxCandidates
           if (taken[a]) continue;
-          const T d2 = tentative_d2(obs, i, a);
+          const T d2 = individual_d2(obs, pred_, i, a);
           if (d2 <= best) {
             best = d2;
             bi = i;
@@ -654,7 +655,7 @@ class SlamStep {
       T best = std::numeric_limits<T>::infinity();
       for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
         if (out.feature[i] != kNewFeature) continue;
-        const T d2 = tentative_d2(obs, i, a);
+        const T d2 = individual_d2(obs, pred_, i, a);
         if (d2 < best) {
           best = d2;
           bi = i;
@@ -721,15 +722,6 @@ class SlamStep {
       const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
       if (j >= 0 && slam_.has_moved(j, gate)) remember_mover(slam_.landmark(j));
     }
-  }
-  /// Observation i against candidate a alone: nu^T (C_aa + R_i)^-1 nu (infinity when not definite).
-  T tentative_d2(const Observations<T, B>& obs, int i, int a) const {
-    const Mat2<T> S = pred_.C.block(a, a) + obs.R[i];
-    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-    if (!(det > T(0)) || !(S(0, 0) > T(0))) return std::numeric_limits<T>::infinity();
-    const Vec2<T> nu = innovation(obs.z[i], pred_.h[a]);
-    const T d2 = (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
-    return std::isfinite(d2) ? d2 : std::numeric_limits<T>::infinity();
   }
   /// commit() with tentative_isolated: the pairs with a tentative landmark are set aside from the
   /// filter's update (round kAlone) and the others go in round 0 (unless a closure ordered them).
