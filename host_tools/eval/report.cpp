@@ -35,6 +35,9 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   runs_over_5_fp += r.score.fp > 5;
   loop_commits += r.loop_commits;
   loop_held_scans += r.loop_held_scans;
+  windows += r.windows;
+  window_commits += r.window_commits;
+  window_held_scans += r.window_held_scans;
   merges += r.merges;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
@@ -100,6 +103,9 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.runs_over_5_fp = runs_over_5_fp;
   row.loop_commits = loop_commits;
   row.loop_held_scans = loop_held_scans;
+  row.windows = windows;
+  row.window_commits = window_commits;
+  row.window_held_scans = window_held_scans;
   row.merges = merges;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;

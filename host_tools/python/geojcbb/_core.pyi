@@ -92,6 +92,10 @@ class Options(TypedDict, total=False):
     loop_detection_probability: float  # default 0.9
     loop_unexplained_density: float  # default 0.003
     loop_merge_d2: float  # default 0
+    hypothesis_rivals: int  # default 0
+    hypothesis_window_scans: int  # default 5
+    hypothesis_margin_nats: float  # default 3
+    hypothesis_hold: bool  # default 0
     # END GENERATED: option keywords
 
 

@@ -126,7 +126,15 @@
   X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
     "set likelihood: observations per m^2 that no old landmark explains (clutter, newer landmarks)") \
   X(REAL, loop_merge_d2, 0, (GE, 0, 0), "", "--loop-merge-d2", \
-    "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)")
+    "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)") \
+  X(INT, hypothesis_rivals, 0, (CLOSED, 0, 2), "", "--hypothesis-rivals", \
+    "pose hypotheses kept beside the best while a scan is ambiguous, each scored on the scans after (0: off)") \
+  X(INT, hypothesis_window_scans, 5, (CLOSED, 1, 32), "scans", "--hypothesis-window", \
+    "scans a window of hypotheses lasts at most; ended without a leader, it commits nothing") \
+  X(REAL, hypothesis_margin_nats, 3, (GT, 0, 0), "nats", "--hypothesis-margin", \
+    "set log-likelihood by which a hypothesis must lead every other to be committed (and rivals open a window)") \
+  X(BOOL, hypothesis_hold, 0, (ANY, 0, 0), "", "--hypothesis-hold", \
+    "while a window is open, hold the observations its hypotheses pair differently (off: the association's stand)")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

@@ -20,6 +20,7 @@
 #include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/reloc/align.hpp"
 #include "geojcbb/reloc/loop.hpp"
+#include "geojcbb/reloc/window.hpp"
 
 namespace geojcbb::node {
 
@@ -57,6 +58,7 @@ struct StageCounts {
   std::uint32_t predict_local = 0, associate = 0, update = 0, augment_review = 0, total = 0;
   std::uint32_t relocalise = 0;  ///< the alignment of a lost scan (0 otherwise)
   std::uint32_t loop = 0;        ///< the closure check (check_loop; 0 when it did not run)
+  std::uint32_t window = 0;      ///< the hypothesis window (check_hypotheses; 0 when it did not run)
 };
 
 template <typename T, class B>
@@ -70,6 +72,7 @@ struct StepResult {
   ekf::ReviewStats review;
   RelocStats reloc;
   reloc::LoopStats<T> loop;
+  reloc::WindowStats<T> window;
   StageCounts counts;
 };
 
@@ -136,6 +139,7 @@ class SlamStep {
     loop_align_ = loop_align;
     loop_state_ = reloc::LoopState<T>{};
     closing_ = false;
+    window_count_ = 0;
     align_ = align;
     gate_ = static_cast<T>(gate);
     view_ = ekf::Visibility<T>{s.min_range_m, s.max_range_m, s.half_fov_rad, s.occlusion_rad};
@@ -158,6 +162,7 @@ class SlamStep {
       closure_count_ = 0;
       mover_count_ = 0;
       movers_caught_ = 0;
+      window_count_ = 0;
     }
     return st;
   }
@@ -208,19 +213,26 @@ class SlamStep {
     st = associate_prepared(obs, assoc_);
     if (st != Status::kOk) return st;
     const std::uint32_t t2 = clock ? clock() : 0;
-    reloc::LoopStats<T> ls;
+    // The closure check's and the window's stats in members, not in this frame (the call chain's
+    // stack budget).
+    reloc::LoopStats<T>& ls = loop_stats_;
     st = check_loop(obs, assoc_, ls);
     if (st != Status::kOk) return st;
     const std::uint32_t t_loop = clock ? clock() : 0;
+    st = check_hypotheses(obs, assoc_, window_stats_);
+    if (st != Status::kOk) return st;
+    const std::uint32_t t_window = clock ? clock() : 0;
     st = commit(obs, assoc_, out, clock);
     if (st != Status::kOk) return st;
     out.loop = ls;
+    out.window = window_stats_;
     out.counts.loop = ls.verdict == reloc::LoopVerdict::kNone ? 0 : t_loop - t2;
+    out.counts.window = window_stats_.verdict == reloc::WindowVerdict::kNone ? 0 : t_window - t_loop;
     out.local = local;
     out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
-    out.counts.total += t_loop - t0;
+    out.counts.total += t_window - t0;
     confirm(out, assoc_.jointly_compatible, rs);
     out.reloc = rs;
     return Status::kOk;
@@ -431,13 +443,8 @@ class SlamStep {
       if (!disputed) continue;
       ++ls.held;
       if (commit_now && align_ws_.pick[i] >= 0) {
-        const int k = align_slam_[static_cast<std::size_t>(align_ws_.index[align_ws_.pick[i]])];
-        assoc.feature[i] = slam_.id(k);
-        assoc.d2[i] = align_ws_.pick_d2[i];
-        assoc.candidate[i] = -1;
-        for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
-          if (pred_.id[a] == assoc.feature[i]) assoc.candidate[i] = static_cast<std::int16_t>(a);
-        }
+        pair_with(assoc, i, align_slam_[static_cast<std::size_t>(align_ws_.index[align_ws_.pick[i]])],
+                  align_ws_.pick_d2[i]);
       } else {
         assoc.feature[i] = kUnmatched;
         assoc.candidate[i] = -1;
@@ -457,6 +464,195 @@ class SlamStep {
     closing_ = true;
     loop_state_ = reloc::LoopState<T>{};
     ls.verdict = reloc::LoopVerdict::kCommitted;
+    return Status::kOk;
+  }
+
+  /// After check_loop() and before commit(): with hypothesis_rivals > 0 and the robot tracking, a scan
+  /// is checked for ambiguity (reloc/window.hpp, docs/hypotheses.md). Seeds: the association's
+  /// pairs with confirmed landmarks of the region, and for each of the first kMaxAnchors
+  /// observations with two or more landmarks in its individual gate, one per such landmark (the
+  /// kMaxAnchorChoices nearest), grown by nearest neighbour; each is a pose-only filter scored with
+  /// the set likelihood. When the best seed pairs kMinPosePairs or more and a seed that conflicts
+  /// with it is within hypothesis_margin_nats, or the best conflicts with the association's, the
+  /// window opens with up to 1 + hypothesis_rivals mutually conflicting seeds, the association's among them.
+  /// While it is open, each scan moves every hypothesis by the filter's motion (a correction of the
+  /// filter's pose, the covariance grown as the filter's), pairs it (the association's member takes
+  /// the association's pairs) and adds its score. A hypothesis whose sum leads every other by the
+  /// margin closes the window: the association's stands; another (with kMinPosePairs pairs on this
+  /// scan) is committed: its pairs replace the association's, the pose block is inflated by
+  /// loop_inflation times the correction squared and the update is linearised at its pose, as a
+  /// loop closure's. The hypotheses pairing a scan alike, or hypothesis_window_scans scans without a
+  /// leader, close it with nothing committed. Meanwhile the association's pairs stand; with
+  /// hypothesis_hold, an observation the hypotheses pair differently is held (kUnmatched; a scan
+  /// with no pair left is not reviewed). A loop closure's scan (pending or committed) closes it.
+  /// @return kOk; kInvalidInput when not configured or for a count mismatch; the statuses of
+  ///         AlignWorkspace::push_landmark (then `assoc` unchanged, the window closed).
+  [[nodiscard, gnu::noinline, gnu::cold]] Status check_hypotheses(const Observations<T, B>& obs,
+                                                                  Association<T, B>& assoc,
+                                                                  reloc::WindowStats<T>& out) {
+    if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
+    out = reloc::WindowStats<T>{};
+    if (cfg_.hypothesis_rivals == 0 || state_ != Localisation::kTracking || closing_ || loop_state_.pending > 0) {
+      window_count_ = 0;
+      return Status::kOk;
+    }
+    // The frozen map: the region's confirmed landmarks, their own covariances.
+    align_ws_.clear_map();
+    for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+      const int j = slam_.index_of(pred_.id[a]);
+      if (j < 0 || slam_.hits(j) < policy_.confirm_hits) continue;
+      align_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
+      const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
+      if (st != Status::kOk) {
+        window_count_ = 0;
+        return st;
+      }
+    }
+    const int m = obs.count;
+    const Pose2<T> xp = slam_.pose();
+    const Mat3<T> Pxx = slam_.pose_covariance();
+    const reloc::SetModel<T> model{cfg_.loop_detection_probability, cfg_.loop_unexplained_density};
+    const T gate = cfg_.gate.individual;
+    const T margin = cfg_.hypothesis_margin_nats;
+    if (window_count_ == 0) {
+      const int seeds = seed_hypotheses(obs, assoc, xp, Pxx, model, gate);
+      out.seeds = seeds;
+      if (seeds <= 1) return Status::kOk;
+      int best = 0;
+      for (int s = 1; s < seeds; ++s) {  // <= kMaxSeeds
+        if (seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll) best = s;
+      }
+      const std::int16_t* const bp = seed_pick_[static_cast<std::size_t>(best)].data();
+      bool rival = false;
+      for (int s = 0; s < seeds; ++s) {  // <= kMaxSeeds
+        rival = rival || (reloc::conflict(bp, seed_pick_[static_cast<std::size_t>(s)].data(), m) &&
+                          seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll - margin);
+      }
+      if (!rival && !reloc::conflict(bp, seed_pick_[0].data(), m)) return Status::kOk;  // the association stands
+      if (reloc::pairs(bp, m) < reloc::kMinPosePairs) return Status::kOk;  // no pose in doubt: the gate's business
+      // Members: the best; the association's when it conflicts with the best (else the best is the
+      // association's path); then the best-scoring seeds that conflict with every member.
+      std::array<int, reloc::kMaxHypotheses> member{};
+      int count = 0;
+      member[static_cast<std::size_t>(count++)] = best;
+      window_assoc_ = 0;
+      if (reloc::conflict(bp, seed_pick_[0].data(), m)) {
+        window_assoc_ = count;
+        member[static_cast<std::size_t>(count++)] = 0;
+      }
+      for (int round = count; round <= cfg_.hypothesis_rivals; ++round) {  // <= kMaxHypotheses
+        int next = -1;
+        for (int s = 0; s < seeds; ++s) {  // <= kMaxSeeds
+          bool apart = true;
+          for (int k = 0; k < count && apart; ++k) {  // <= kMaxHypotheses
+            const int mk = member[static_cast<std::size_t>(k)];
+            apart = s != mk && reloc::conflict(seed_pick_[static_cast<std::size_t>(mk)].data(),
+                                               seed_pick_[static_cast<std::size_t>(s)].data(), m);
+          }
+          if (apart && (next < 0 || seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(next)].ll)) {
+            next = s;
+          }
+        }
+        if (next < 0) break;
+        member[static_cast<std::size_t>(count++)] = next;
+      }
+      for (int k = 0; k < count; ++k) {  // <= kMaxHypotheses
+        const auto s = static_cast<std::size_t>(member[static_cast<std::size_t>(k)]);
+        window_[static_cast<std::size_t>(k)] = seed_[s];
+        window_pick_[static_cast<std::size_t>(k)] = seed_pick_[s];
+        window_d2_[static_cast<std::size_t>(k)].fill(T(0));
+      }
+      window_count_ = count;
+      window_age_ = 1;
+      window_pose_ = xp;  // commit() moves it to the filter's pose after the update
+      window_cov_ = Pxx;
+      out.verdict = reloc::WindowVerdict::kOpened;
+      out.hypotheses = count;
+      out.held = keep_agreed(assoc);
+      return Status::kOk;
+    }
+    // The window is open: each hypothesis moved as the filter moved, paired and scored.
+    Mat3<T> grown = Pxx - window_cov_;
+    grown = T(0.5) * (grown + grown.transpose());
+    const bool moved = grown(0, 0) >= T(0) && grown(1, 1) >= T(0) && grown(2, 2) >= T(0);
+    std::array<Pose2<T>, reloc::kMaxHypotheses> at{};
+    for (int k = 0; k < window_count_; ++k) {  // <= kMaxHypotheses
+      reloc::PoseHypothesis<T>& h = window_[static_cast<std::size_t>(k)];
+      h.x = reloc::corrected(reloc::correction_between(window_pose_, h.x), xp);
+      if (moved) h.P += grown;
+      at[static_cast<std::size_t>(k)] = h.x;
+      // The association's path takes the association's pairs; every other grows its own.
+      association_picks(obs, assoc, k == window_assoc_);
+      h.ll += reloc::run_hypothesis(obs, align_ws_, model, loop_align_, gate, k != window_assoc_, h);
+      window_pick_[static_cast<std::size_t>(k)] = align_ws_.pick;
+      for (int i = 0; i < m; ++i)
+        window_d2_[static_cast<std::size_t>(k)][i] = align_ws_.pick_d2[i];  // <= kMaxObservations
+    }
+    window_pose_ = xp;
+    window_cov_ = Pxx;
+    int lead = 0;
+    for (int k = 1; k < window_count_; ++k) {  // <= kMaxHypotheses
+      if (window_[static_cast<std::size_t>(k)].ll > window_[static_cast<std::size_t>(lead)].ll) lead = k;
+    }
+    T second = -std::numeric_limits<T>::infinity();
+    for (int k = 0; k < window_count_; ++k) {  // <= kMaxHypotheses
+      if (k != lead) second = std::max(second, window_[static_cast<std::size_t>(k)].ll);
+    }
+    out.lead = window_[static_cast<std::size_t>(lead)].ll - second;
+    out.hypotheses = window_count_;
+    if (out.lead >= margin && lead == window_assoc_) {  // the association's path won
+      window_count_ = 0;
+      out.verdict = reloc::WindowVerdict::kMerged;
+      return Status::kOk;
+    }
+    // A correction needs a pose: the leader's pairs on this scan, kMinPosePairs at least.
+    if (reloc::pairs(window_pick_[static_cast<std::size_t>(lead)].data(), m) < reloc::kMinPosePairs) out.lead = T(0);
+    if (out.lead >= margin) {
+      // Committed: the leader's pairs, at its pose before this scan's pairs moved it.
+      const Pose2<T> x = at[static_cast<std::size_t>(lead)];
+      int pairings = 0;
+      for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+        const int k = window_pick_[static_cast<std::size_t>(lead)][static_cast<std::size_t>(i)];
+        assoc.candidate[i] = -1;
+        if (k < 0) {
+          assoc.feature[i] = kUnmatched;
+          continue;
+        }
+        pair_with(assoc, i, align_slam_[static_cast<std::size_t>(k)],
+                  window_d2_[static_cast<std::size_t>(lead)][static_cast<std::size_t>(i)]);
+        ++pairings;
+      }
+      assoc.pairings = pairings;
+      const T dx = x.x - xp.x, dy = x.y - xp.y, dth = wrap_angle(x.theta - xp.theta);
+      close_Q_ = Mat3<T>::Zero();
+      close_Q_(0, 0) = cfg_.loop_inflation * dx * dx;
+      close_Q_(1, 1) = cfg_.loop_inflation * dy * dy;
+      close_Q_(2, 2) = cfg_.loop_inflation * dth * dth;
+      close_at_ = x;
+      closing_ = true;
+      window_count_ = 0;
+      out.verdict = reloc::WindowVerdict::kCommitted;
+      out.held = pairings;
+      return Status::kOk;
+    }
+    bool disputed = false;                           // do two hypotheses pair this scan differently?
+    for (int a = 0; a < window_count_; ++a) {        // <= kMaxHypotheses
+      for (int b = a + 1; b < window_count_; ++b) {  // <= kMaxHypotheses
+        disputed = disputed || reloc::conflict(window_pick_[static_cast<std::size_t>(a)].data(),
+                                               window_pick_[static_cast<std::size_t>(b)].data(), m);
+      }
+    }
+    if (!disputed) {  // no scan can tell them apart any more: the association stands
+      window_count_ = 0;
+      out.verdict = reloc::WindowVerdict::kMerged;
+      return Status::kOk;
+    }
+    out.held = keep_agreed(assoc);
+    out.verdict = reloc::WindowVerdict::kHeld;
+    if (++window_age_ > cfg_.hypothesis_window_scans) {
+      window_count_ = 0;
+      out.verdict = reloc::WindowVerdict::kExpired;
+    }
     return Status::kOk;
   }
 
@@ -531,6 +727,10 @@ class SlamStep {
       (void)slam_.update(obs, assoc, ekf_ws_, nullptr, round_.data(), r);
     }
     if (aside) update_tentative(obs, assoc);
+    if (window_count_ > 0) {  // the hypotheses are corrections of the filter's pose as it is now
+      window_pose_ = slam_.pose();
+      window_cov_ = slam_.pose_covariance();
+    }
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
     out.count = obs.count;
@@ -562,8 +762,11 @@ class SlamStep {
     if (cfg_.loop_merge_d2 > T(0)) note_closure(assoc);
     if (cfg_.tentative_isolated) catch_movers(assoc);
     ekf::ReviewStats rs;
-    // The view and policy were validated by configure(), the counts above.
-    if (slam_.review(pred_, assoc, view_, policy_, rs) != Status::kOk) rs = ekf::ReviewStats{};
+    // The view and policy were validated by configure(), the counts above. A scan the hypothesis
+    // window holds is no evidence: its landmarks were not paired because the pose is in doubt.
+    const bool held = holding_;
+    holding_ = false;
+    if (!held && slam_.review(pred_, assoc, view_, policy_, rs) != Status::kOk) rs = ekf::ReviewStats{};
     if (merge_left_ > 0) {
       --merge_left_;
       rs.merged = merge_duplicates(assoc);
@@ -577,6 +780,121 @@ class SlamStep {
   }
 
  private:
+  /// Observation i paired with landmark j (filter index) at d2, its candidate in the prediction
+  /// found (-1 when the landmark is not a candidate).  O(kMaxCandidates)
+  void pair_with(Association<T, B>& assoc, int i, int j, T d2) const {
+    assoc.feature[i] = slam_.id(j);
+    assoc.d2[i] = d2;
+    assoc.candidate[i] = -1;
+    for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+      if (pred_.id[a] == assoc.feature[i]) assoc.candidate[i] = static_cast<std::int16_t>(a);
+    }
+  }
+  /// check_hypotheses() while the window is open: an observation every hypothesis pairs with the
+  /// same landmark is paired so; every other is held (kUnmatched). A scan with no pair left is no
+  /// evidence for the review (commit() skips it). @return the observations held
+  int keep_agreed(Association<T, B>& assoc) {
+    if (!cfg_.hypothesis_hold) return 0;
+    int held = 0, pairings = 0;
+    for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+      const int k = window_pick_[0][static_cast<std::size_t>(i)];
+      bool agreed = true;
+      for (int h = 1; h < window_count_ && agreed; ++h) {  // <= kMaxHypotheses
+        agreed = window_pick_[static_cast<std::size_t>(h)][static_cast<std::size_t>(i)] == k;
+      }
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      if (agreed && k < 0 && (j < 0 || slam_.hits(j) < policy_.confirm_hits)) {
+        // No hypothesis pairs it with the frozen map: the association's answer (new, or a
+        // tentative landmark) stands.
+        pairings += assoc.feature[i] >= 0;
+        continue;
+      }
+      assoc.candidate[i] = -1;
+      if (!agreed || k < 0) {
+        assoc.feature[i] = kUnmatched;
+        ++held;
+        continue;
+      }
+      pair_with(assoc, i, align_slam_[static_cast<std::size_t>(k)], window_d2_[0][static_cast<std::size_t>(i)]);
+      ++pairings;
+    }
+    assoc.pairings = pairings;
+    holding_ = pairings == 0;
+    return held;
+  }
+  /// align_ws_.pick: the association's pairs with the frozen map (`use`), or none.  O(m n)
+  void association_picks(const Observations<T, B>& obs, const Association<T, B>& assoc, bool use) {
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      align_ws_.pick[i] = -1;
+      const int j = use && assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      for (int k = 0; k < align_ws_.n && j >= 0; ++k) {  // <= kMaxLandmarks
+        if (align_slam_[static_cast<std::size_t>(k)] == j) align_ws_.pick[i] = static_cast<std::int16_t>(k);
+      }
+    }
+  }
+  /// check_hypotheses() with the window closed: the seeds of this scan in seed_ and seed_pick_ (the
+  /// association's first), scored from the filter's pose; none when no observation is ambiguous.
+  /// Out of line and cold: it runs on ambiguous scans only. @return the seeds
+  /// O(kMaxSeeds kMaxObservations kMaxLandmarks)
+  [[gnu::noinline, gnu::cold]] int seed_hypotheses(const Observations<T, B>& obs, const Association<T, B>& assoc,
+                                                   const Pose2<T>& xp, const Mat3<T>& Pxx,
+                                                   const reloc::SetModel<T>& model, T gate) {
+    const int m = obs.count;
+    // Anchors: the first observations with two or more landmarks in the individual gate at the
+    // filter's pose, each with its nearest kMaxAnchorChoices.
+    std::array<std::array<std::int16_t, reloc::kMaxAnchorChoices>, reloc::kMaxAnchors> choice{};
+    std::array<std::int16_t, reloc::kMaxAnchors> anchor{};
+    int anchors = 0;
+    Vec2<T> nu;
+    Mat2<T> S;
+    Mat23<T> Jx;
+    for (int i = 0; i < m && anchors < reloc::kMaxAnchors; ++i) {  // <= kMaxObservations
+      std::array<T, reloc::kMaxAnchorChoices> d2s{};
+      auto& c = choice[static_cast<std::size_t>(anchors)];
+      c.fill(-1);
+      int found = 0;
+      for (int j = 0; j < align_ws_.n; ++j) {  // <= kMaxLandmarks
+        const T d2 = reloc::window_detail::pair_d2(obs, i, align_ws_, j, xp, Pxx, nu, S, Jx);
+        if (!(d2 <= gate)) continue;
+        ++found;
+        // Insert among the nearest kMaxAnchorChoices.
+        int at = reloc::kMaxAnchorChoices;
+        while (at > 0 && (c[static_cast<std::size_t>(at - 1)] < 0 || d2s[static_cast<std::size_t>(at - 1)] > d2)) {
+          --at;  // <= kMaxAnchorChoices
+        }
+        if (at >= reloc::kMaxAnchorChoices) continue;
+        for (int k = reloc::kMaxAnchorChoices - 1; k > at; --k) {  // <= kMaxAnchorChoices
+          c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k - 1)];
+          d2s[static_cast<std::size_t>(k)] = d2s[static_cast<std::size_t>(k - 1)];
+        }
+        c[static_cast<std::size_t>(at)] = static_cast<std::int16_t>(j);
+        d2s[static_cast<std::size_t>(at)] = d2;
+      }
+      if (found >= 2) anchor[static_cast<std::size_t>(anchors++)] = static_cast<std::int16_t>(i);
+    }
+    if (anchors == 0) return 0;
+    // Seed 0: the association's pairs with the frozen map.
+    int seeds = 0;
+    for (int s = 0; s < 1 + anchors * reloc::kMaxAnchorChoices; ++s) {  // <= kMaxSeeds
+      int ai = -1, aj = -1;
+      if (s > 0) {
+        ai = anchor[static_cast<std::size_t>((s - 1) / reloc::kMaxAnchorChoices)];
+        aj = choice[static_cast<std::size_t>((s - 1) / reloc::kMaxAnchorChoices)]
+                   [static_cast<std::size_t>((s - 1) % reloc::kMaxAnchorChoices)];
+        if (aj < 0) continue;
+      }
+      association_picks(obs, assoc, s == 0);
+      if (s > 0) align_ws_.pick[ai] = static_cast<std::int16_t>(aj);
+      reloc::PoseHypothesis<T>& h = seed_[static_cast<std::size_t>(seeds)];
+      h.x = xp;
+      h.P = Pxx;
+      h.ll = reloc::run_hypothesis(obs, align_ws_, model, loop_align_, gate, s > 0, h);
+      seed_pick_[static_cast<std::size_t>(seeds)] = align_ws_.pick;
+      ++seeds;
+    }
+    return seeds;
+  }
+
   /// A committed closure's rounds (commit()): the paired observations ranked by their landmark's
   /// position variance (trace of its 2x2 block; the landmarks mapped before the drift first), rank k
   /// of p in round k kClosureRounds / p, the two most certain in the first. Out of line: its loops stay out of commit()'s frame.
@@ -865,6 +1183,22 @@ class SlamStep {
   std::array<Mover, kMaxMovers> movers_{};
   int mover_count_ = 0;
   std::uint32_t movers_caught_ = 0;  ///< since reset()
+  // The hypothesis window (StepSettings::hypothesis_rivals): its members, the filter's pose and pose
+  // covariance when they were last moved, the scans it has lasted; the seeds of an opening scan
+  // (the members' pairs of the last scan in the first rows), and whether commit() holds the scan.
+  std::array<reloc::PoseHypothesis<T>, reloc::kMaxHypotheses> window_;
+  int window_count_ = 0;
+  int window_age_ = 0;
+  int window_assoc_ = 0;  ///< the member that follows the association's pairs
+  Pose2<T> window_pose_{};
+  Mat3<T> window_cov_;
+  std::array<reloc::PoseHypothesis<T>, reloc::kMaxSeeds> seed_;
+  std::array<std::array<std::int16_t, B::kMaxObservations>, reloc::kMaxSeeds> seed_pick_{};
+  std::array<std::array<std::int16_t, B::kMaxObservations>, reloc::kMaxHypotheses> window_pick_{};
+  std::array<std::array<T, B::kMaxObservations>, reloc::kMaxHypotheses> window_d2_{};
+  bool holding_ = false;
+  reloc::LoopStats<T> loop_stats_;      ///< step()'s, until it writes them out
+  reloc::WindowStats<T> window_stats_;  ///< step()'s, until it writes them out
 };
 
 }  // namespace geojcbb::node

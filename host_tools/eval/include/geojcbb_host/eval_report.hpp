@@ -41,9 +41,10 @@ struct ReportRow {
   int fp_in_group = 0, fp_other_group = 0;             ///< false pairs of a landmark: within its group / elsewhere
   int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
-  int merges = 0;                                      ///< duplicates merged after closures (loop_merge_d2)
-  double reloc_error_m = NAN;                          ///< mean position error after the kidnap [m]
-  double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
+  int windows = 0, window_commits = 0, window_held_scans = 0;  ///< hypothesis windows: opened, committed, scans open
+  int merges = 0;                                              ///< duplicates merged after closures (loop_merge_d2)
+  double reloc_error_m = NAN;                                  ///< mean position error after the kidnap [m]
+  double reloc_anees_before = NAN, reloc_anees_after = NAN;    ///< mean NEES before and after the kidnap
 };
 
 inline double accuracy(const Score& s) {
@@ -140,14 +141,16 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
         "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
         "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
         "duplicates merged; a landmark's false pairs by place: another landmark of its group (MRCLAM: within a row of "
-        "tubes) or elsewhere\n");
-    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s %9s %10s\n", "strategy", "runs > 5", "duplicate",
-                 "original", "clutter", "closures", "held", "merged", "in group", "elsewhere");
+        "tubes) or elsewhere; with --hypotheses, windows opened, committed and scans open\n");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s %9s %10s %8s %9s %7s\n", "strategy", "runs > 5",
+                 "duplicate", "original", "clutter", "closures", "held", "merged", "in group", "elsewhere", "windows",
+                 "committed", "open");
     for (const ReportRow& r : rows) {
       if (r.runs > 0)
-        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d %9d %10d\n", r.name.c_str(), r.runs_over_5_fp,
-                     r.fp_to_duplicate, r.fp_to_original, r.fp_clutter, r.loop_commits, r.loop_held_scans, r.merges,
-                     r.fp_in_group, r.fp_other_group);
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d %9d %10d %8d %9d %7d\n", r.name.c_str(),
+                     r.runs_over_5_fp, r.fp_to_duplicate, r.fp_to_original, r.fp_clutter, r.loop_commits,
+                     r.loop_held_scans, r.merges, r.fp_in_group, r.fp_other_group, r.windows, r.window_commits,
+                     r.window_held_scans);
     }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
@@ -208,6 +211,9 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"runs_over_5_false_pairs", r.runs_over_5_fp},
                  {"loop_closures_committed", r.loop_commits},
                  {"loop_scans_held", r.loop_held_scans},
+                 {"hypothesis_windows", r.windows},
+                 {"hypothesis_windows_committed", r.window_commits},
+                 {"hypothesis_window_scans", r.window_held_scans},
                  {"landmarks_merged", r.merges},
                  {"false_pairs_to_duplicate", r.fp_to_duplicate},
                  {"false_pairs_to_original", r.fp_to_original},

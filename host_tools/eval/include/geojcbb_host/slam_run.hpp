@@ -69,13 +69,16 @@ struct MapLandmark {
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
-/// the relocaliser, L the loop-closure check. kRobustPreset names the preset that has all of them.
+/// the relocaliser, L the loop-closure check, T tentative landmarks isolated, H the hypothesis
+/// window (kPresetRivals kept beside the best). kRobustPreset names the preset with V, R and L.
 struct Method {
   Strategy strategy = Strategy::kGeojcbb;
   bool oracle = false;
   bool verify = false;      ///< AssociationConfig::verify switched into the preset
   bool relocalise = false;  ///< StepSettings::relocalise switched in
   bool loop_check = false;  ///< StepSettings::loop_check switched in
+  bool tentative = false;   ///< StepSettings::tentative_isolated switched in
+  bool window = false;      ///< StepSettings::hypothesis_rivals (kPresetRivals) switched in
   std::string name() const {
     if (oracle) return "TRUTH";
     std::string n = to_string(strategy);
@@ -83,6 +86,8 @@ struct Method {
     if (verify && strategy != Strategy::kPcjcbb) suffix += 'V';  // PCJCBB verifies anyway
     if (relocalise) suffix += 'R';
     if (loop_check) suffix += 'L';
+    if (tentative) suffix += 'T';
+    if (window) suffix += 'H';
     return suffix.empty() ? n : n + "+" + suffix;
   }
   void apply(RunOptions& o) const {
@@ -91,7 +96,11 @@ struct Method {
     o.step.verify = o.step.verify || verify;
     o.step.relocalise = o.step.relocalise || relocalise;
     o.step.loop_check = o.step.loop_check || loop_check;
+    o.step.tentative_isolated = o.step.tentative_isolated || tentative;
+    if (window && o.step.hypothesis_rivals == 0) o.step.hypothesis_rivals = kPresetRivals;
   }
+  /// The rivals the suffix H keeps beside the best (unless --hypothesis-rivals sets them).
+  static constexpr int kPresetRivals = 2;
 };
 
 /// The preset with every piece of the lost-and-found work: PCJCBB (pose-free verification), the
@@ -105,7 +114,8 @@ constexpr const char* kRobustPreset = "PCJCBB+RL";
 /// The presets as the tools' help texts name them.
 constexpr const char* kPresetsHelp =
     "ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, each optionally with +V (verification), +R (relocaliser), "
-    "+L (loop-closure check) or a combination (+VRL); PCJCBB+RL has all";
+    "+L (loop-closure check), +T (tentative landmarks isolated), +H (hypothesis window) or a combination "
+    "(+VRLTH); PCJCBB+RL is the robust preset";
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
 struct StepRecord {
@@ -148,6 +158,9 @@ struct RunResult {
   int relocalisations = 0;             ///< poses the relocaliser accepted
   int loop_commits = 0;                ///< loop closures the closure check committed (loop_check)
   int loop_held_scans = 0;             ///< scans whose disputed pairs it held (a pending closure)
+  int windows = 0;                     ///< hypothesis windows opened (hypotheses)
+  int window_commits = 0;              ///< windows that committed a leader
+  int window_held_scans = 0;           ///< scans a window was open (the opening one included)
   int merges = 0;                      ///< duplicates merged after a closure (loop_merge_d2)
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,

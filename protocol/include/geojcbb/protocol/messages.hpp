@@ -220,6 +220,10 @@ struct Config : Codec<Config> {
   float loop_detection_probability = 0.9f;    ///< (0, 1)
   float loop_unexplained_density = 0.003f;    ///< > 0
   float loop_merge_d2 = 0.0f;                 ///< >= 0 (0: off)
+  std::uint8_t hypothesis_rivals = 0;         ///< pose hypotheses beside the best, 0 (off) .. 2
+  std::uint8_t hypothesis_window_scans = 5;   ///< 1 .. 32
+  float hypothesis_margin_nats = 3.0f;        ///< > 0
+  bool hypothesis_hold = false;               ///< disputed observations held while a window is open
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -293,6 +297,11 @@ struct Config : Codec<Config> {
         field("loop_unexplained_density", &Config::loop_unexplained_density, range::above(0.0f), "1/m^2"),
         field("loop_merge_d2", &Config::loop_merge_d2, range::not_below(0.0f), "",
               "after a closure, landmarks closer than this d2 are merged (0: off)"),
+        field("hypothesis_rivals", &Config::hypothesis_rivals, range::between(0, 2), "", "0: off"),
+        field("hypothesis_window_scans", &Config::hypothesis_window_scans, range::between(1, 32), "scans"),
+        field("hypothesis_margin_nats", &Config::hypothesis_margin_nats, range::above(0.0f), "nats"),
+        field("hypothesis_hold", &Config::hypothesis_hold, range::one_of(0, 1), "",
+              "disputed observations held while a window is open"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -711,7 +720,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 131 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 138 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
