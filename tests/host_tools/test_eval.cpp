@@ -9,6 +9,7 @@
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/slam_run.hpp"
+#include "support/data.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -70,6 +71,7 @@ TEST_CASE(
 }
 
 TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
+  if (!geojcbb::test::have_mrclam()) return;
   const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(6));
   const std::vector<int> g = landmark_groups(ds, kLandmarkGroupRadius_m);
   REQUIRE(g.size() == 15);
@@ -100,6 +102,7 @@ TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
 // calibrated on the same robot in the other dataset), is consistent (time-averaged pose NEES <= 6,
 // 3 if perfect) and maps no landmark twice.
 TEST_CASE("MRCLAM: TRUTH on one robot of each dataset is consistent and maps no duplicate") {
+  if (!geojcbb::test::have_mrclam()) return;
   for (const int number : {6, 7}) {
     const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(number));
     const mrclam::Dataset other = mrclam::load_dataset(mrclam::dataset_dir(number == 6 ? 7 : 6));

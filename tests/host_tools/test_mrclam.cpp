@@ -1,5 +1,6 @@
 // The UTIAS MRCLAM reader on the real files (default_data_dir(): ../shared/data/mrclam beside the
-// repository, or $GEOJCBB_MRCLAM_DIR; a missing folder fails the data tests): the counts the
+// repository, or $GEOJCBB_MRCLAM_DIR; a missing folder skips the data tests, or fails them with
+// GEOJCBB_REQUIRE_DATA=1, tests/support/data.hpp): the counts the
 // dataset's README states, scan grouping and order, sensor limits, the barcode table, truth
 // interpolation, malformed files reported with their line, and plausible noise estimates.
 #include <doctest/doctest.h>
@@ -16,6 +17,7 @@
 #include <string>
 
 #include "geojcbb_host/mrclam.hpp"
+#include "support/data.hpp"
 
 using namespace geojcbb::host::mrclam;
 namespace fs = std::filesystem;
@@ -92,6 +94,7 @@ std::string error_of(const std::function<void()>& f) {
 }  // namespace
 
 TEST_CASE("MRCLAM: measurement counts match the dataset's README") {
+  if (!geojcbb::test::have_mrclam()) return;
   // Dataset 6: 19,377 measurements, 15,383 of landmarks; dataset 7: 20,282 (16,067).
   const Counts six = count(loaded(6)), seven = count(loaded(7));
   CHECK(six.all == 19377);
@@ -122,6 +125,7 @@ TEST_CASE("MRCLAM: measurement counts match the dataset's README") {
 }
 
 TEST_CASE("MRCLAM: scans are time-ordered camera frames") {
+  if (!geojcbb::test::have_mrclam()) return;
   for (int n : {6, 7}) {
     CAPTURE(n);
     long scans = 0;
@@ -162,6 +166,7 @@ TEST_CASE("MRCLAM: scans are time-ordered camera frames") {
 }
 
 TEST_CASE("MRCLAM: ranges and bearings stay within the camera's limits") {
+  if (!geojcbb::test::have_mrclam()) return;
   // Measured: landmark ranges 0.943-8.632 m (dataset 6) and 0.974-8.417 m (7), all measurements
   // 0.943-8.632 and 0.949-8.417; bearings -0.592..0.572 rad in both. (The README's 9.3 m is not
   // reached in these two runs.)
@@ -189,6 +194,7 @@ TEST_CASE("MRCLAM: ranges and bearings stay within the camera's limits") {
 }
 
 TEST_CASE("MRCLAM: barcode table and landmark layout of datasets 6 and 7") {
+  if (!geojcbb::test::have_mrclam()) return;
   // The README says both differ between datasets. In these two runs the barcode tables are
   // identical, and the surveyed landmark positions differ by at most 1.2 mm (a re-survey).
   const Dataset& a = loaded(6).ds;
@@ -213,6 +219,7 @@ TEST_CASE("MRCLAM: barcode table and landmark layout of datasets 6 and 7") {
 }
 
 TEST_CASE("MRCLAM: ground truth covers every landmark measurement") {
+  if (!geojcbb::test::have_mrclam()) return;
   // Dataset 6's robot 4 has the only ground-truth gaps over 0.5 s (0.555 s and 2.03 s); no
   // measurement falls in them.
   for (int n : {6, 7}) {
@@ -327,6 +334,7 @@ TEST_CASE("MRCLAM: a malformed or missing file names the file and line") {
 }
 
 TEST_CASE("MRCLAM: measurement noise against ground truth is plausible") {
+  if (!geojcbb::test::have_mrclam()) return;
   // Measured (robust std = 1.4826 MAD): dataset 6, 15,383 residuals: range mean -0.037 m, std
   // 0.184 m, robust 0.131 m; bearing mean -0.0003 rad, std 0.071 rad, robust 0.0083 rad; 332
   // outliers (2.16 %). Dataset 7, 16,067: range -0.033, 0.203, 0.127 m; bearing -0.0022, 0.060,
@@ -350,6 +358,7 @@ TEST_CASE("MRCLAM: measurement noise against ground truth is plausible") {
 }
 
 TEST_CASE("MRCLAM: odometry against ground truth is plausible") {
+  if (!geojcbb::test::have_mrclam()) return;
   // Measured over 1 s windows (odometry - truth): dataset 6, 4,079 windows (350 skipped): v mean
   // 0.0038, std 0.0111, robust 0.0076 m/s; w mean 0.0026, std 0.042, robust 0.0156 rad/s.
   // Dataset 7, 4,225 (235): v 0.0052, 0.0119, 0.0080 m/s; w 0.0025, 0.051, 0.0170 rad/s.

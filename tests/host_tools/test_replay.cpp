@@ -11,6 +11,7 @@
 #include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/mrclam_calibration.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
+#include "support/data.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -70,6 +71,7 @@ std::string error_of(const std::string& text) {
 }  // namespace
 
 TEST_CASE("replay: a converted MRCLAM robot replays to the MRCLAM replay's results") {
+  if (!geojcbb::test::have_mrclam()) return;
   // 150 s of dataset 6 robot 1 with the report's model (cross calibration from dataset 7, the
   // data's noise for what the model leaves constant) and its run options.
   const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(6));
@@ -137,6 +139,7 @@ TEST_CASE("replay: a converted MRCLAM robot replays to the MRCLAM replay's resul
 }
 
 TEST_CASE("replay: the raw MRCLAM log gives the noise from its labelled data") {
+  if (!geojcbb::test::have_mrclam()) return;
   const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(6));
   const mrclam::RobotLog log = replay::truncate(mrclam::load_robot(ds, 2), 300.0);
   const replay::EventLog raw = replay::mrclam_raw_log(ds, log);
