@@ -39,6 +39,8 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   window_commits += r.window_commits;
   window_held_scans += r.window_held_scans;
   merges += r.merges;
+  not_augmented += r.not_augmented;
+  full_runs += r.not_augmented > 0;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
   removed_true += r.removed_true_landmarks;
@@ -107,6 +109,8 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.window_commits = window_commits;
   row.window_held_scans = window_held_scans;
   row.merges = merges;
+  row.not_augmented = not_augmented;
+  row.full_runs = full_runs;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;
     row.reloc_anees_before = reloc_anees_before / reloc_runs;
@@ -231,6 +235,10 @@ void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportR
                "ANEES", "group F1");
   for (std::size_t s = 0; s < rows.size(); ++s) {
     const ReportRow& w = rows[s];
+    if (w.runs == 0) {  // nothing to score: never a perfect score
+      std::fprintf(f, "  %-9s   all %d runs failed: %s\n", w.name.c_str(), w.failed, w.error.c_str());
+      continue;
+    }
     std::fprintf(f, "  %-9s %7.4f %9.4f %7.4f %10.1f %10.1f %9.1f %13d %8.2f %9.4f\n", w.name.c_str(), w.score.f1(),
                  w.score.precision(), w.score.recall(), w.landmarks, w.duplicates, w.spurious_in_map, w.fp_clutter,
                  w.anees, group_rows[s].score.f1());

@@ -307,7 +307,8 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   res.relocalisations += reloc.relocalised;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
-    if (o == node::Outcome::kNotAugmented) throw std::runtime_error("augment: map capacity exceeded");
+    // A full map is a state, as on the device: the observation is not added, and counted.
+    res.not_augmented += o == node::Outcome::kNotAugmented;
     if (o != node::Outcome::kNewLandmark) continue;
     if (static_cast<std::size_t>(s.result.feature[i]) != sc.ids()) {
       throw std::runtime_error("landmark ids are not handed out in order");

@@ -43,8 +43,9 @@ struct ReportRow {
   int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
   int windows = 0, window_commits = 0, window_held_scans = 0;  ///< hypothesis windows: opened, committed, scans open
   int merges = 0;                                              ///< duplicates merged after closures (loop_merge_d2)
-  double reloc_error_m = NAN;                                  ///< mean position error after the kidnap [m]
-  double reloc_anees_before = NAN, reloc_anees_after = NAN;    ///< mean NEES before and after the kidnap
+  int not_augmented = 0, full_runs = 0;  ///< observations not added (the map full), and runs whose map filled
+  double reloc_error_m = NAN;            ///< mean position error after the kidnap [m]
+  double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
 
 inline double accuracy(const Score& s) {
@@ -170,6 +171,9 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   }
   for (const ReportRow& r : rows) {
     if (r.failed > 0) std::fprintf(f, "  %s: %d runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());
+    if (r.full_runs > 0)
+      std::fprintf(f, "  %s: the map filled in %d runs; %d observations were not added as landmarks\n", r.name.c_str(),
+                   r.full_runs, r.not_augmented);
   }
 }
 
@@ -185,10 +189,11 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"tn", s.tn},
                  {"fp", s.fp},
                  {"fn", s.fn},
-                 {"precision", s.precision()},
-                 {"recall", s.recall()},
-                 {"f1", s.f1()},
-                 {"accuracy", accuracy(s)},
+                 // No run scored: no score (null), never a perfect one.
+                 {"precision", r.runs > 0 ? num(s.precision()) : nlohmann::json(nullptr)},
+                 {"recall", r.runs > 0 ? num(s.recall()) : nlohmann::json(nullptr)},
+                 {"f1", r.runs > 0 ? num(s.f1()) : nlohmann::json(nullptr)},
+                 {"accuracy", r.runs > 0 ? num(accuracy(s)) : nlohmann::json(nullptr)},
                  {"scans", r.scans},
                  {"association_s_total", r.assoc_s},
                  {"association_ms_per_scan", r.scans ? 1e3 * r.assoc_s / r.scans : 0.0},
@@ -215,6 +220,8 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"hypothesis_windows_committed", r.window_commits},
                  {"hypothesis_window_scans", r.window_held_scans},
                  {"landmarks_merged", r.merges},
+                 {"runs_map_full", r.full_runs},
+                 {"not_augmented", r.not_augmented},
                  {"false_pairs_to_duplicate", r.fp_to_duplicate},
                  {"false_pairs_to_original", r.fp_to_original},
                  {"false_pairs_in_group", r.fp_in_group},

@@ -32,6 +32,7 @@ struct RunAggregate {
   int loop_commits = 0, loop_held_scans = 0;                   ///< RunResult's, summed
   int windows = 0, window_commits = 0, window_held_scans = 0;  ///< RunResult's, summed
   int merges = 0;                                              ///< RunResult's, summed
+  int not_augmented = 0, full_runs = 0;                        ///< RunResult's, summed; runs whose map filled
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
   RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;

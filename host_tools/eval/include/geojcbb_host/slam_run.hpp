@@ -154,6 +154,7 @@ struct RunResult {
   int removed_true_landmarks = 0;      ///< tentative landmarks of true landmarks removed
   std::vector<MapLandmark> map;        ///< the final map
   int dropped_observations = 0;        ///< over the observation capacity in a scan
+  int not_augmented = 0;               ///< would have become landmarks, but the map was full (not added)
   int budget_hits = 0;                 ///< scans whose JCBB node budget ran out
   int relocalisations = 0;             ///< poses the relocaliser accepted
   int loop_commits = 0;                ///< loop closures the closure check committed (loop_check)
@@ -302,14 +303,15 @@ class SimSource : public RunSource {
 };
 
 /// The in-process filter's capacity (SlamSession): observations per scan, landmarks in the map.
-constexpr int kEvalMaxObservations = 48, kEvalMaxLandmarks = 400;
+constexpr int kEvalMaxObservations = 48, kEvalMaxLandmarks = 1000;
 
 /// One EKF-SLAM run fed step by step (the simulator and the MRCLAM replay both
 /// drive it): predict with odometry; per scan associate, score against the
 /// observations' truth, update, augment and review the landmarks. Host
 /// capacity: 48 observations per scan (the nearest are kept), 128 candidates,
-/// 400 landmarks. Throws std::runtime_error when the map capacity is exceeded
-/// or a library call fails (the message names the call and its status).
+/// kEvalMaxLandmarks landmarks. A full map is not an error: new landmarks are then refused and
+/// counted (RunResult::not_augmented), as on the device. Throws std::runtime_error when a
+/// library call fails (the message names the call and its status).
 class SlamSession {
  public:
   SlamSession(const RunOptions& options, const SensorModel& sensor, std::size_t true_landmarks, const Pose2<double>& x0,
