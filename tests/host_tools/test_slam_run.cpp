@@ -3,6 +3,11 @@
 // (eq. 15) and the run is reproducible from its seed.
 #include <doctest/doctest.h>
 
+#include <cstdio>
+#include <string>
+
+#include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/report.hpp"
 #include "geojcbb_host/slam_run.hpp"
 
 using namespace geojcbb;
@@ -75,4 +80,33 @@ TEST_CASE("scorer: a false pair is counted by place, within the observed landmar
   CHECK(r.fp_other_group == 2);
   CHECK(r.group_score.tp == 2);  // the neighbour is right at group level
   CHECK(r.group_score.fp == 3);
+}
+
+TEST_CASE("report: a preset whose runs all failed is never scored, a run whose map filled is") {
+  RunAggregate failed;
+  failed.fail("predict: kNonFinite");
+  failed.fail("predict: kNonFinite");
+  RunAggregate full;
+  RunResult r;
+  r.score.tp = 9;
+  r.score.fn = 1;
+  r.not_augmented = 7;
+  full.add(r, 1.0);
+  const std::vector<ReportRow> rows{failed.row("JCBB", false, true), full.row("PCJCBB", false, true)};
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  print_summary(rows, rows, f);
+  print_tables(rows, f);
+  std::rewind(f);
+  std::string text(1 << 16, '\0');
+  text.resize(std::fread(&text[0], 1, text.size(), f));
+  std::fclose(f);
+  CHECK(text.find("JCBB        all 2 runs failed: predict: kNonFinite") != std::string::npos);
+  CHECK(text.find("PCJCBB: the map filled in 1 runs; 7 observations were not added as landmarks") != std::string::npos);
+  const nlohmann::json j = rows_json(rows);
+  CHECK(j[0]["f1"].is_null());
+  CHECK(j[0]["precision"].is_null());
+  CHECK(j[1]["f1"].get<double>() == doctest::Approx(2 * 9.0 / (2 * 9 + 1)));
+  CHECK(j[1]["not_augmented"] == 7);
+  CHECK(j[1]["runs_map_full"] == 1);
 }
