@@ -1,4 +1,5 @@
-// EKF-SLAM: motion Jacobians against finite differences; predict_local's C against an explicit dense
+// EKF-SLAM: motion Jacobians (velocity model, pose increment) against finite differences; the
+// increment model against the velocity model it can express; predict_local's C against an explicit dense
 // H P H^T; a noise-free run stays on the truth; NEES within its 95 % bounds over a seeded Monte Carlo
 // run; bad input and capacity change no state; no allocation; a duplicate merged.
 #include <doctest/doctest.h>
@@ -490,6 +491,107 @@ TEST_CASE_TEMPLATE("augment: a range that would overflow the state is refused, n
 
 // Found by tests/fuzz/fuzz_associate: finite odometry whose sigma squared overflows gave an Inf
 // pose covariance, and predict() returned kOk.
+TEST_CASE("pose increment: compose's Jacobians equal central finite differences") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2, 2);
+  const double h = 1e-6;
+  auto diff = [&](const Pose2<double>& a, const Pose2<double>& b) {
+    return Vec3<double>((a.x - b.x) / (2 * h), (a.y - b.y) / (2 * h), wrap_angle(a.theta - b.theta) / (2 * h));
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    const Pose2<double> x{u(rng), u(rng), wrap_angle(u(rng))};
+    PoseIncrement<double> d;
+    d.dx_m = u(rng);
+    d.dy_m = 0.3 * u(rng);
+    d.dtheta_rad = 0.5 * u(rng);
+    Mat3<double> Jx, Ju;
+    compose(x, d, &Jx, &Ju);
+    for (int k = 0; k < 3; ++k) {
+      Pose2<double> a = x, b = x;
+      (k == 0 ? a.x : k == 1 ? a.y : a.theta) += h;
+      (k == 0 ? b.x : k == 1 ? b.y : b.theta) -= h;
+      CHECK((diff(compose(a, d), compose(b, d)) - Jx.col(k)).norm() < 1e-6);
+      PoseIncrement<double> p = d, q = d;
+      (k == 0 ? p.dx_m : k == 1 ? p.dy_m : p.dtheta_rad) += h;
+      (k == 0 ? q.dx_m : k == 1 ? q.dy_m : q.dtheta_rad) -= h;
+      CHECK((diff(compose(x, p), compose(x, q)) - Ju.col(k)).norm() < 1e-6);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("predict: a pose increment equal to the velocity model's gives its pose and covariance", T, float,
+                   double) {
+  // The velocity model's interval as an increment in the robot's frame: d = v dt along the midpoint
+  // heading, its covariance G Q G^T rotated into the robot's frame.
+  auto a = std::make_unique<Slam<T, EB>>();
+  auto b = std::make_unique<Slam<T, EB>>();
+  Mat3<T> P0;
+  P0 << T(0.04), T(0.01), T(0.002), T(0.01), T(0.09), T(-0.003), T(0.002), T(-0.003), T(0.01);
+  for (auto* s : {a.get(), b.get()}) {
+    REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, P0) == Status::kOk);
+    Mat2<T> R;
+    R << T(0.01), T(0), T(0), T(3e-4);
+    FeatureId id = 0;
+    REQUIRE(s->augment(Vec2<T>(T(3), T(0.4)), R, id) == Status::kOk);
+  }
+  const Odometry<T> od{T(0.8), T(0.3), T(0.5), T(0.05), T(0.02)};
+  Mat3<T> F;
+  Mat32<T> G;
+  const Pose2<T> x = a->pose();
+  move(x, od, &F, &G);
+  const Mat2<T> Q = Vec2<T>(od.sigma_v_mps * od.sigma_v_mps, od.sigma_w_radps * od.sigma_w_radps).asDiagonal();
+  Mat3<T> Rt = Mat3<T>::Identity();  // world -> robot frame at the start
+  Rt.template topLeftCorner<2, 2>() << std::cos(x.theta), std::sin(x.theta), -std::sin(x.theta), std::cos(x.theta);
+  PoseIncrement<T> d;
+  const T half = T(0.5) * od.w_radps * od.dt_s, dist = od.v_mps * od.dt_s;
+  d.dx_m = dist * std::cos(half);
+  d.dy_m = dist * std::sin(half);
+  d.dtheta_rad = od.w_radps * od.dt_s;
+  d.cov = Rt * G * Q * G.transpose() * Rt.transpose();
+  d.cov = T(0.5) * (d.cov + d.cov.transpose());
+  REQUIRE(a->predict(od) == Status::kOk);
+  REQUIRE(b->predict(d) == Status::kOk);
+  const T tol = std::is_same<T, float>::value ? T(2e-6) : T(1e-12);
+  CHECK(std::abs(a->pose().x - b->pose().x) < tol);
+  CHECK(std::abs(a->pose().y - b->pose().y) < tol);
+  CHECK(std::abs(a->pose().theta - b->pose().theta) < tol);
+  for (int r = 0; r < a->dim(); ++r) {
+    for (int c = 0; c < a->dim(); ++c) CHECK(std::abs(a->cov(r, c) - b->cov(r, c)) < tol);
+  }
+}
+
+TEST_CASE_TEMPLATE("predict: a bad pose increment is refused, nothing changed; none allocates", T, float, double) {
+  auto s = std::make_unique<Slam<T, EB>>();
+  REQUIRE(s->reset(Pose2<T>{T(1), T(2), T(0.3)}, Mat3<T>::Identity() * T(0.01)) == Status::kOk);
+  std::vector<unsigned char> before(sizeof(*s));
+  std::memcpy(before.data(), static_cast<const void*>(s.get()), sizeof(*s));
+  PoseIncrement<T> d;
+  d.dx_m = T(0.5);
+  d.cov = Vec3<T>(T(1e-4), T(1e-4), T(1e-5)).asDiagonal();
+  PoseIncrement<T> bad = d;
+  bad.dy_m = std::numeric_limits<T>::quiet_NaN();
+  CHECK(s->predict(bad) == Status::kNonFinite);
+  bad = d;
+  bad.cov(0, 1) = T(1e-3);  // not symmetric
+  CHECK(s->predict(bad) == Status::kNotPositiveDefinite);
+  bad.cov(1, 0) = T(1e-3);  // symmetric, but |correlation| 10: indefinite
+  CHECK(s->predict(bad) == Status::kNotPositiveDefinite);
+  bad = d;
+  bad.cov(2, 2) = T(-1e-6);
+  CHECK(s->predict(bad) == Status::kNotPositiveDefinite);
+  bad = d;
+  bad.cov(0, 0) = std::numeric_limits<T>::infinity();
+  CHECK(s->predict(bad) == Status::kNonFinite);
+  CHECK(std::memcmp(static_cast<const void*>(s.get()), before.data(), sizeof(*s)) == 0);
+  PoseIncrement<T> exact;  // a zero covariance: an exact increment
+  exact.dx_m = T(0.1);
+  Status st = Status::kNoConvergence;
+  CHECK(allocations_during([&] { st = s->predict(d); }) == 0);
+  CHECK(st == Status::kOk);
+  CHECK(s->predict(exact) == Status::kOk);
+  CHECK(std::abs(double(s->pose().x) - (1 + 0.6 * std::cos(0.3))) < 1e-5);
+}
+
 TEST_CASE_TEMPLATE("predict: odometry that would overflow the covariance is refused, nothing changed", T, float,
                    double) {
   auto s = std::make_unique<Slam<T, EB>>();

@@ -1,9 +1,13 @@
-// ekf: the velocity motion model of a differential-drive robot over one odometry interval, with
-// midpoint heading, and its analytic Jacobians.
+// ekf: the motion models over one odometry interval, with their analytic Jacobians.
+// The velocity model of a differential-drive robot, with midpoint heading:
 //   x' = x + v dt cos(theta + w dt / 2),  y' = y + v dt sin(theta + w dt / 2),  theta' = theta + w dt
-// Inputs are the commanded (v, w), as the MRCLAM odometry files give them.
+// (inputs are the commanded (v, w), as the MRCLAM odometry files give them), and the pose increment
+// (wheel odometry, a vehicle model, a ROS odometry message's delta): (dx, dy, dtheta) in the robot's
+// frame at the start of the interval, with its full 3x3 covariance, composed onto the pose:
+//   x' = x + cos(theta) dx - sin(theta) dy,  y' = y + sin(theta) dx + cos(theta) dy,  theta' = theta + dtheta
 #pragma once
 
+#include "geojcbb/core/math.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/core/status.hpp"
 
@@ -40,6 +44,57 @@ Pose2<T> move(const Pose2<T>& x, const Odometry<T>& u, Mat3<T>* J_x_pose = nullp
         T(0), u.dt_s;
   }
   return {x.x + d * c, x.y + d * s, wrap_angle(x.theta + u.w_radps * u.dt_s)};
+}
+
+/// One odometry interval as a pose increment in the robot's frame at its start.
+template <typename T>
+struct PoseIncrement {
+  T dx_m{};                       ///< forward [m]
+  T dy_m{};                       ///< to the left [m]
+  T dtheta_rad{};                 ///< turn, counter-clockwise [rad]
+  Mat3<T> cov = Mat3<T>::Zero();  ///< of (dx, dy, dtheta): finite, symmetric, positive semi-definite
+};
+
+/// Composes the increment onto the pose.
+/// @param[out] J_x_pose  3x3 Jacobian with respect to the pose; may be null
+/// @param[out] J_x_u     3x3 Jacobian with respect to (dx, dy, dtheta); may be null
+template <typename T>
+Pose2<T> compose(const Pose2<T>& x, const PoseIncrement<T>& u, Mat3<T>* J_x_pose = nullptr, Mat3<T>* J_x_u = nullptr) {
+  const T c = fmath::cos(x.theta);
+  const T s = fmath::sin(x.theta);
+  const T ddx = c * u.dx_m - s * u.dy_m, ddy = s * u.dx_m + c * u.dy_m;
+  if (J_x_pose != nullptr) {
+    *J_x_pose << T(1), T(0), -ddy,  //
+        T(0), T(1), ddx,            //
+        T(0), T(0), T(1);
+  }
+  if (J_x_u != nullptr) {
+    *J_x_u << c, -s, T(0),  //
+        s, c, T(0),         //
+        T(0), T(0), T(1);
+  }
+  return {x.x + ddx, x.y + ddy, wrap_angle(x.theta + u.dtheta_rad)};
+}
+
+/// An increment's covariance is acceptable when finite, symmetric and positive semi-definite
+/// (every principal minor at least -kCovarianceTolerance times its scale; a zero covariance, an
+/// exact increment, is accepted).
+template <typename T>
+bool is_psd3(const Mat3<T>& m) {
+  if (!m.allFinite()) return false;
+  for (int r = 0; r < 3; ++r) {    // <= 3
+    for (int c = 0; c < r; ++c) {  // <= 3
+      if (!nearly_equal(m(r, c), m(c, r))) return false;
+    }
+    if (m(r, r) < T(0)) return false;
+  }
+  const T tol = kCovarianceTolerance<T>;
+  for (int a = 0; a < 3; ++a) {        // <= 3: the 2x2 principal minors
+    for (int b = a + 1; b < 3; ++b) {  // <= 3
+      if (m(a, a) * m(b, b) - m(a, b) * m(a, b) < -tol * m(a, a) * m(b, b)) return false;
+    }
+  }
+  return m.determinant() >= -tol * m(0, 0) * m(1, 1) * m(2, 2);
 }
 
 /// A calibrated drive: the commanded (v, w) scaled to the motion they produce, and a process noise

@@ -264,13 +264,36 @@ class Slam {
     Mat3<T> F;
     Mat32<T> G;
     const Pose2<T> next = move(pose(), u, &F, &G);
+    const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
+    return apply_motion(next, F, G * Q * G.transpose());
+  }
+
+  /// The motion of one interval given as a pose increment in the robot's frame with its covariance
+  /// (ekf::compose): the pose moved, its covariance F P F^T + J Q J^T, the pose-landmark blocks F P.
+  /// @return kOk; kNonFinite (an input, or the result); kNotSymmetric or kNotPositiveDefinite for an
+  ///         increment covariance that is not symmetric positive semi-definite (is_psd3);
+  ///         kNotPositiveDefinite when the new pose block is not positive definite. Nothing changes
+  ///         unless kOk.  O(n)
+  [[nodiscard]] Status predict(const PoseIncrement<T>& u) {
+    if (!std::isfinite(u.dx_m) || !std::isfinite(u.dy_m) || !std::isfinite(u.dtheta_rad) || !u.cov.allFinite()) {
+      return Status::kNonFinite;
+    }
+    if (!is_psd3(u.cov)) return Status::kNotPositiveDefinite;
+    Mat3<T> F, J;
+    const Pose2<T> next = compose(pose(), u, &F, &J);
+    return apply_motion(next, F, J * symmetric_part(u.cov) * J.transpose());
+  }
+
+ private:
+  /// predict()'s common part: the pose moves to `next` with Jacobian F and process noise Qx (in
+  /// the world frame); F's heading column taken from the pose before the last update (FEJ).
+  [[nodiscard]] Status apply_motion(const Pose2<T>& next, Mat3<T> F, const Mat3<T>& Qx) {
     if (options_.first_estimates_jacobians && updated_) {
       // FEJ: the displacement from the pose before the last update, not from the updated pose.
       F(0, 2) -= x_[1] - prior_[1];
       F(1, 2) += x_[0] - prior_[0];
     }
-    const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
-    const Mat3<T> Prr = F * P_.template block<3, 3>(0, 0) * F.transpose() + G * Q * G.transpose();
+    const Mat3<T> Prr = F * P_.template block<3, 3>(0, 0) * F.transpose() + Qx;
     // Finite inputs can still overflow (speeds or sigmas near the scalar's max): check the new
     // pose and covariance before writing any of them.
     if (!std::isfinite(next.x) || !std::isfinite(next.y) || !std::isfinite(next.theta) || !Prr.allFinite()) {
@@ -296,6 +319,7 @@ class Slam {
     return Status::kOk;
   }
 
+ public:
   /// The association input for the current scan: the landmarks with predicted range < radius_m
   /// (r + d, eq. 5), nearest first and at most MaxCandidates, with their stable ids, predicted
   /// measurements h and C = H P H^T. With `confirmed_first` (a policy), the confirmed landmarks
