@@ -255,7 +255,9 @@ class Slam {
   /// Moves the robot by one odometry interval.
   /// @return kOk; kNonFinite (also when the new pose or covariance would overflow); kInvalidInput
   ///         for dt < 0 or a negative standard deviation. No state changes unless kOk.
-  [[nodiscard]] Status predict(const Odometry<T>& u) {
+  /// Out of line (as apply_motion): the Jacobians stay out of the caller's frame (Node::handle's,
+  /// on the stack budget's deepest call chain).
+  [[nodiscard, gnu::noinline]] Status predict(const Odometry<T>& u) {
     if (!std::isfinite(u.v_mps) || !std::isfinite(u.w_radps) || !std::isfinite(u.dt_s) ||
         !std::isfinite(u.sigma_v_mps) || !std::isfinite(u.sigma_w_radps)) {
       return Status::kNonFinite;
@@ -287,7 +289,7 @@ class Slam {
  private:
   /// predict()'s common part: the pose moves to `next` with Jacobian F and process noise Qx (in
   /// the world frame); F's heading column taken from the pose before the last update (FEJ).
-  [[nodiscard]] Status apply_motion(const Pose2<T>& next, Mat3<T> F, const Mat3<T>& Qx) {
+  [[nodiscard, gnu::noinline]] Status apply_motion(const Pose2<T>& next, Mat3<T> F, const Mat3<T>& Qx) {
     if (options_.first_estimates_jacobians && updated_) {
       // FEJ: the displacement from the pose before the last update, not from the updated pose.
       F(0, 2) -= x_[1] - prior_[1];
