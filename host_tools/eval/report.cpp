@@ -38,6 +38,7 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   windows += r.windows;
   window_commits += r.window_commits;
   window_held_scans += r.window_held_scans;
+  regrouped += r.regrouped;
   merges += r.merges;
   not_augmented += r.not_augmented;
   full_runs += r.not_augmented > 0;
@@ -107,6 +108,7 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.loop_held_scans = loop_held_scans;
   row.windows = windows;
   row.window_commits = window_commits;
+  row.regrouped = regrouped;
   row.window_held_scans = window_held_scans;
   row.merges = merges;
   row.not_augmented = not_augmented;

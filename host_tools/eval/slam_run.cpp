@@ -174,18 +174,19 @@ std::vector<Method> select_methods(const std::vector<std::string>& names, bool a
   }
   for (const std::string& n : names) {
     Method m;
-    // The suffix letters: V goes to parse_strategy, R, L, T and H are the step's pieces.
+    // The suffix letters: V goes to parse_strategy, R, L, T, H and C are the step's pieces.
     const std::size_t plus = n.find('+');
     std::string base = n.substr(0, plus), verify;
     bool ok = true;
     for (std::size_t i = plus == std::string::npos ? n.size() : plus + 1; i < n.size(); ++i) {
       const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(n[i])));
-      ok = ok && (c == 'V' || c == 'R' || c == 'L' || c == 'T' || c == 'H');
+      ok = ok && (c == 'V' || c == 'R' || c == 'L' || c == 'T' || c == 'H' || c == 'C');
       if (c == 'V') verify = "+V";
       m.relocalise = m.relocalise || c == 'R';
       m.loop_check = m.loop_check || c == 'L';
       m.tentative = m.tentative || c == 'T';
       m.window = m.window || c == 'H';
+      m.clusters = m.clusters || c == 'C';
     }
     if (plus + 1 == n.size()) ok = false;  // a bare "+"
     if (!ok || !parse_strategy((base + verify).c_str(), m.strategy, m.verify)) {
@@ -282,6 +283,7 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
       check(s.step.check_hypotheses(s.obs, s.out, window), "check_hypotheses");
       res.windows += window.verdict == reloc::WindowVerdict::kOpened;
       res.window_commits += window.verdict == reloc::WindowVerdict::kCommitted;
+      res.regrouped += window.regrouped;
       res.window_held_scans += window.verdict == reloc::WindowVerdict::kOpened ||
                                window.verdict == reloc::WindowVerdict::kHeld ||
                                window.verdict == reloc::WindowVerdict::kExpired;

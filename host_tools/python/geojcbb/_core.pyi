@@ -50,6 +50,9 @@ class Options(TypedDict, total=False):
     min_range_m: float  # default 0
     max_range_m: float  # default 10
     half_fov_rad: float  # default 3.14159265358979
+    sensor_x_m: float  # default 0
+    sensor_y_m: float  # default 0
+    sensor_theta_rad: float  # default 0
     confirm_hits: int  # default 2
     max_misses: int  # default 2
     max_tentative_reviews: int  # default 10
@@ -96,6 +99,7 @@ class Options(TypedDict, total=False):
     hypothesis_window_scans: int  # default 5
     hypothesis_margin_nats: float  # default 3
     hypothesis_hold: bool  # default 0
+    cluster_first: bool  # default 0
     # END GENERATED: option keywords
 
 

@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <random>
+#include <vector>
 
 #include "geojcbb/core/range_bearing.hpp"
 
@@ -77,4 +78,67 @@ TEST_CASE("inverse_observe: inverts observe - Jacobians equal finite differences
       CHECK(((inverse_observe(x, a) - inverse_observe(x, b)) / (2 * h) - Jz.col(k)).norm() < 1e-6);
     }
   }
+}
+
+TEST_CASE("a sensor mount: Jacobians equal central finite differences, the inverse inverts, zero is the origin") {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-5, 5);
+  const double h = 1e-6;
+  // Victoria Park's laser: 3.78 m ahead of the rear axle, 0.50 m left; and random mounts.
+  std::vector<Mount<double>> mounts{{3.78, 0.5, 0.0}};
+  for (int k = 0; k < 20; ++k) mounts.push_back({u(rng), u(rng), wrap_angle(u(rng))});
+  for (const Mount<double>& m : mounts) {
+    for (int trial = 0; trial < 20; ++trial) {
+      const Pose2<double> x{u(rng), u(rng), wrap_angle(u(rng))};
+      const Pose2<double> s = sensor_pose(x, m);
+      Vec2<double> l(u(rng), u(rng));
+      if ((l - Vec2<double>(s.x, s.y)).norm() < 0.3) continue;
+      Mat23<double> Jp;
+      Mat2<double> Jl;
+      const Vec2<double> z = observe(x, m, l, &Jp, &Jl);
+      CHECK((z - observe(s, l)).norm() < 1e-12);  // the landmark seen from the sensor's pose
+      for (int k = 0; k < 3; ++k) {
+        Pose2<double> a = x, b = x;
+        (k == 0 ? a.x : k == 1 ? a.y : a.theta) += h;
+        (k == 0 ? b.x : k == 1 ? b.y : b.theta) -= h;
+        const Vec2<double> za = observe(a, m, l), zb = observe(b, m, l);
+        const Vec2<double> d((za.x() - zb.x()) / (2 * h), wrap_angle(za.y() - zb.y()) / (2 * h));
+        CHECK((d - Jp.col(k)).norm() < 1e-5);
+      }
+      for (int k = 0; k < 2; ++k) {
+        Vec2<double> a = l, b = l;
+        a[k] += h;
+        b[k] -= h;
+        const Vec2<double> za = observe(x, m, a), zb = observe(x, m, b);
+        const Vec2<double> d((za.x() - zb.x()) / (2 * h), wrap_angle(za.y() - zb.y()) / (2 * h));
+        CHECK((d - Jl.col(k)).norm() < 1e-5);
+      }
+      // The inverse: back to the landmark; its Jacobians against finite differences.
+      Mat23<double> Ip;
+      Mat2<double> Iz;
+      CHECK((inverse_observe(x, m, z, &Ip, &Iz) - l).norm() < 1e-9);
+      for (int k = 0; k < 3; ++k) {
+        Pose2<double> a = x, b = x;
+        (k == 0 ? a.x : k == 1 ? a.y : a.theta) += h;
+        (k == 0 ? b.x : k == 1 ? b.y : b.theta) -= h;
+        const Vec2<double> d = (inverse_observe(a, m, z) - inverse_observe(b, m, z)) / (2 * h);
+        CHECK((d - Ip.col(k)).norm() < 1e-5);
+      }
+      for (int k = 0; k < 2; ++k) {
+        Vec2<double> a = z, b = z;
+        a[k] += h;
+        b[k] -= h;
+        const Vec2<double> d = (inverse_observe(x, m, a) - inverse_observe(x, m, b)) / (2 * h);
+        CHECK((d - Iz.col(k)).norm() < 1e-5);
+      }
+    }
+  }
+  // At the origin the mount is the plain model, bit for bit (float too).
+  const Pose2<float> xf{1.5f, -2.0f, 0.7f};
+  const Vec2<float> lf(4.0f, 3.0f);
+  Mat23<float> J0, J1;
+  const Vec2<float> z0 = observe(xf, lf, &J0), z1 = observe(xf, Mount<float>{}, lf, &J1);
+  CHECK(z0 == z1);
+  CHECK(J0 == J1);
+  CHECK(inverse_observe(xf, z0) == inverse_observe(xf, Mount<float>{}, z0));
 }

@@ -806,3 +806,49 @@ TEST_CASE_TEMPLATE("augment and add_known_landmark: a new block singular in T is
   }
   CHECK(refused > 0);
 }
+
+TEST_CASE_TEMPLATE("a sensor mount: landmarks placed and predicted from the sensor's pose; bad mounts refused", T,
+                   float, double) {
+  // Victoria Park's laser on its ute: 3.78 m ahead of the rear axle, 0.50 m left (and a small yaw).
+  const Mount<T> m{T(3.78), T(0.5), T(0.05)};
+  auto f = std::make_unique<Fixture<T>>();
+  REQUIRE(f->slam.reset(Pose2<T>{T(1), T(2), T(0.6)}, Vec3<T>(T(0.01), T(0.01), T(1e-3)).asDiagonal()) == Status::kOk);
+  CHECK(f->slam.set_mount(Mount<T>{std::numeric_limits<T>::quiet_NaN(), T(0), T(0)}) == Status::kNonFinite);
+  CHECK(f->slam.mount().at_origin());  // unchanged
+  REQUIRE(f->slam.set_mount(m) == Status::kOk);
+  // A landmark from a measurement sits where the sensor saw it; its predicted measurement is that
+  // measurement; a noise-free update of it moves nothing.
+  const Vec2<T> z(T(7), T(-0.4));
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  FeatureId id = 0;
+  REQUIRE(f->slam.augment(z, R, id) == Status::kOk);
+  const Pose2<T> xs = sensor_pose(f->slam.pose(), m);
+  const Vec2<T> l = f->slam.landmark(0);
+  const T tol = std::is_same<T, float>::value ? T(2e-5) : T(1e-12);
+  CHECK((l - inverse_observe(xs, z)).norm() < tol);
+  CHECK((l - Vec2<T>(xs.x, xs.y)).norm() == doctest::Approx(double(z.x())).epsilon(1e-5));
+  LocalMapStats st;
+  REQUIRE(f->slam.predict_local(T(100), f->ws, f->pred, st) == Status::kOk);
+  REQUIRE(f->pred.count == 1);
+  CHECK((f->pred.h[0] - z).norm() < tol);
+  // The landmark's block: J_l_pose P J_l_pose^T + J_l_z R J_l_z^T with the mount's pose Jacobian.
+  Mat23<T> Jp;
+  Mat2<T> Jz;
+  (void)inverse_observe(Pose2<T>{T(1), T(2), T(0.6)}, m, z, &Jp, &Jz);
+  const Mat2<T> expected =
+      Jp * Mat3<T>(Vec3<T>(T(0.01), T(0.01), T(1e-3)).asDiagonal()) * Jp.transpose() + Jz * R * Jz.transpose();
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) CHECK(std::abs(f->slam.cov(3 + r, 3 + c) - expected(r, c)) < T(10) * tol);
+  f->obs.clear();
+  REQUIRE(f->obs.push(z, R) == Status::kOk);
+  f->assoc.count = 1;
+  f->assoc.feature[0] = id;
+  f->assoc.candidate[0] = 0;
+  f->assoc.pairings = 1;
+  const Pose2<T> before = f->slam.pose();
+  REQUIRE(f->slam.update(f->obs, f->assoc, f->ws) == Status::kOk);
+  CHECK(std::abs(f->slam.pose().x - before.x) < tol);
+  CHECK(std::abs(f->slam.pose().y - before.y) < tol);
+  CHECK(std::abs(f->slam.pose().theta - before.theta) < tol);
+}

@@ -44,6 +44,11 @@
     "farthest range at which a mapped landmark is expected, > min_range_m (host: sensor's - --view-margin)") \
   X(REAL, half_fov_rad, 3.14159265358979, (LOPEN, 0, 3.1415927410125732), "rad", "", \
     "half the bearing span in which a mapped landmark is expected (host: half the FOV less 3 sigma)") \
+  X(REAL, sensor_x_m, 0, (CLOSED, -100, 100), "m", "--sensor-x", \
+    "where the sensor sits on the robot: ahead of the point the motion model moves") \
+  X(REAL, sensor_y_m, 0, (CLOSED, -100, 100), "m", "--sensor-y", "where the sensor sits on the robot: to the left") \
+  X(REAL, sensor_theta_rad, 0, (CLOSED, -3.1415927410125732, 3.1415927410125732), "rad", "--sensor-heading", \
+    "the sensor's heading on the robot (its bearing 0 in the body frame)") \
   X(INT, confirm_hits, 2, (CLOSED, 1, 255), "", "--confirm-hits", \
     "pairings (the first sighting included) that confirm a tentative landmark") \
   X(INT, max_misses, 2, (CLOSED, 1, 255), "", "--max-misses", \
@@ -134,7 +139,9 @@
   X(REAL, hypothesis_margin_nats, 3, (GT, 0, 0), "nats", "--hypothesis-margin", \
     "set log-likelihood by which a hypothesis must lead every other to be committed (and rivals open a window)") \
   X(BOOL, hypothesis_hold, 0, (ANY, 0, 0), "", "--hypothesis-hold", \
-    "while a window is open, hold the observations its hypotheses pair differently (off: the association's stand)")
+    "while a window is open, hold the observations its hypotheses pair differently (off: the association's stand)") \
+  X(BOOL, cluster_first, 0, (ANY, 0, 0), "", "--cluster-first", \
+    "pair each cluster of observations (within dbscan_eps_m) as a unit first, its members at that posterior")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

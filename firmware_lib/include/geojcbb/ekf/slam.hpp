@@ -239,6 +239,15 @@ class Slam {
   int index_of(FeatureId id) const { return book_.index_of(id); }
   int dim() const { return Layout::landmark(landmarks()); }
   Pose2<T> pose() const { return {x_[0], x_[1], x_[2]}; }
+  /// Where the sensor sits on the robot (core/range_bearing.hpp); every measurement prediction,
+  /// Jacobian and new landmark goes through it. Kept by reset().
+  const Mount<T>& mount() const { return mount_; }
+  /// @return kOk; kNonFinite for a non-finite mount (then the mount is unchanged).
+  [[nodiscard]] Status set_mount(const Mount<T>& m) {
+    if (!std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.theta)) return Status::kNonFinite;
+    mount_ = m;
+    return Status::kOk;
+  }
   Vec2<T> landmark(int j) const { return Vec2<T>(x_[Layout::landmark(j)], x_[Layout::landmark(j) + 1]); }
   /// Where the measurement Jacobians of landmark j are evaluated: its first estimate with
   /// first-estimates Jacobians, else its current estimate.
@@ -376,8 +385,8 @@ class Slam {
     out.count = n;
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
       out.id[a] = id(idx[a]);
-      out.h[a] = observe(xr, landmark(idx[a]));
-      observe(xr, linearisation_point(idx[a]), &Hp[a], &Hl[a]);
+      out.h[a] = observe(xr, mount_, landmark(idx[a]));
+      observe(xr, mount_, linearisation_point(idx[a]), &Hp[a], &Hl[a]);
     }
     const Mat3<T> Prr = P_.template block<3, 3>(0, 0);
     for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
@@ -427,8 +436,8 @@ class Slam {
       if (j < 0) return Status::kInvalidInput;
       if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
       if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
-      const Vec2<T> h = observe(xr, landmark(j));
-      observe(xr, linearisation_point(j), &ws.Hp[p], &ws.Hl[p]);
+      const Vec2<T> h = observe(xr, mount_, landmark(j));
+      observe(xr, mount_, linearisation_point(j), &ws.Hp[p], &ws.Hl[p]);
       const Vec2<T> nu = innovation(obs.z[i], h);
       ws.nu[2 * p] = nu.x();
       ws.nu[2 * p + 1] = nu.y();
@@ -576,8 +585,8 @@ class Slam {
     Mat23<T> Hp;
     Mat2<T> Hl;
     const Pose2<T> xr = pose();
-    const Vec2<T> nu = innovation(z, observe(xr, landmark(j)));
-    observe(xr, linearisation_point(j), &Hp, &Hl);
+    const Vec2<T> nu = innovation(z, observe(xr, mount_, landmark(j)));
+    observe(xr, mount_, linearisation_point(j), &Hp, &Hl);
     // A = P H^T (n x 2), in the update's scratch (its first two columns).
     constexpr int K = kUpdateBlockCols;
     auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
@@ -633,7 +642,7 @@ class Slam {
     if (book_.full()) return Status::kCapacityExceeded;
     Mat23<T> Jp;
     Mat2<T> Jz;
-    const Vec2<T> l = inverse_observe(pose(), z, &Jp, &Jz);
+    const Vec2<T> l = inverse_observe(pose(), mount_, z, &Jp, &Jz);
     const int n = dim();  // first row of the new landmark
     // A finite z can still overflow (a range near the scalar's max): check the new mean and
     // covariance before writing any of them.
@@ -868,6 +877,7 @@ class Slam {
 
   static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
+  Mount<T> mount_{};
   T prior_[2] = {T(0), T(0)};               ///< the position before the updates since the last predict (FEJ)
   Covariance P_;                            ///< P, packed
   LandmarkBook<T, B::kMaxLandmarks> book_;  ///< one record per landmark, in the index order of x and P

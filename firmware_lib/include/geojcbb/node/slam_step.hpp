@@ -136,6 +136,9 @@ class SlamStep {
     // Last: make_strategy checks before it writes, so a refusal here changes nothing either.
     st = make_strategy(s.strategy, s, cfg_);
     if (st != Status::kOk) return st;
+    const Mount<T> mount{s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad};
+    (void)slam_.set_mount(mount);  // finite: in_range
+    align_ws_.mount = mount;
     loop_align_ = loop_align;
     loop_state_ = reloc::LoopState<T>{};
     closing_ = false;
@@ -227,7 +230,8 @@ class SlamStep {
     out.loop = ls;
     out.window = window_stats_;
     out.counts.loop = ls.verdict == reloc::LoopVerdict::kNone ? 0 : t_loop - t2;
-    out.counts.window = window_stats_.verdict == reloc::WindowVerdict::kNone ? 0 : t_window - t_loop;
+    const bool windowed = window_stats_.verdict != reloc::WindowVerdict::kNone || cfg_.cluster_first;
+    out.counts.window = windowed ? t_window - t_loop : 0;
     out.local = local;
     out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
@@ -487,12 +491,15 @@ class SlamStep {
   /// with no pair left is not reviewed). A loop closure's scan (pending or committed) closes it.
   /// @return kOk; kInvalidInput when not configured or for a count mismatch; the statuses of
   ///         AlignWorkspace::push_landmark (then `assoc` unchanged, the window closed).
+  /// With cluster_first, each cluster of observations is paired as a unit first (pair_cluster),
+  /// on every tracked scan with the window closed, before the window's part.
   [[nodiscard, gnu::noinline, gnu::cold]] Status check_hypotheses(const Observations<T, B>& obs,
                                                                   Association<T, B>& assoc,
                                                                   reloc::WindowStats<T>& out) {
     if (!configured_ || assoc.count != obs.count) return Status::kInvalidInput;
     out = reloc::WindowStats<T>{};
-    if (cfg_.hypothesis_rivals == 0 || state_ != Localisation::kTracking || closing_ || loop_state_.pending > 0) {
+    if ((cfg_.hypothesis_rivals == 0 && !cfg_.cluster_first) || state_ != Localisation::kTracking || closing_ ||
+        loop_state_.pending > 0) {
       window_count_ = 0;
       return Status::kOk;
     }
@@ -514,6 +521,25 @@ class SlamStep {
     const reloc::SetModel<T> model{cfg_.loop_detection_probability, cfg_.loop_unexplained_density};
     const T gate = cfg_.gate.individual;
     const T margin = cfg_.hypothesis_margin_nats;
+    if (cfg_.cluster_first && window_count_ == 0) {
+      // Each cluster of kMinPosePairs or more paired as a unit (label_clusters, pair_cluster).
+      const int clusters = label_clusters(obs);
+      for (int c = 0; c < clusters; ++c) {  // <= kMaxObservations
+        int size = 0;
+        for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+          align_ws_.skip[i] = cluster_label_[i] != c;
+          size += cluster_label_[i] == c;
+        }
+        if (size < reloc::kMinPosePairs) continue;
+        const int seeds = seed_hypotheses(obs, assoc, xp, Pxx, model, gate);
+        out.regrouped += pair_cluster(obs, assoc, c, seeds, xp, Pxx, model, gate);
+      }
+      align_ws_.skip.fill(false);
+      int pairings = 0;
+      for (int i = 0; i < m; ++i) pairings += assoc.feature[i] >= 0;  // <= kMaxObservations
+      assoc.pairings = pairings;
+    }
+    if (cfg_.hypothesis_rivals == 0) return Status::kOk;
     if (window_count_ == 0) {
       const int seeds = seed_hypotheses(obs, assoc, xp, Pxx, model, gate);
       out.seeds = seeds;
@@ -849,6 +875,7 @@ class SlamStep {
     Mat2<T> S;
     Mat23<T> Jx;
     for (int i = 0; i < m && anchors < reloc::kMaxAnchors; ++i) {  // <= kMaxObservations
+      if (align_ws_.skip[i]) continue;
       std::array<T, reloc::kMaxAnchorChoices> d2s{};
       auto& c = choice[static_cast<std::size_t>(anchors)];
       c.fill(-1);
@@ -893,6 +920,99 @@ class SlamStep {
       ++seeds;
     }
     return seeds;
+  }
+
+  /// check_hypotheses() with cluster_first: the observations linked into clusters (two within
+  /// dbscan_eps_m of each other in the sensor frame are in one) in cluster_label_: connected
+  /// components of the eps-graph, grown through a queue (each observation is queued once).
+  /// Distances by the law of cosines. Out of line and cold. @return the clusters
+  /// O(kMaxObservations^2)
+  [[gnu::noinline, gnu::cold]] int label_clusters(const Observations<T, B>& obs) {
+    const int m = obs.count;
+    std::array<std::int8_t, B::kMaxObservations> queue;
+    auto near = [&](int p, int q) {
+      const T rp = obs.z[p].x(), rq = obs.z[q].x();
+      return rp * rp + rq * rq - T(2) * rp * rq * fmath::cos(obs.z[p].y() - obs.z[q].y()) <=
+             cfg_.dbscan_eps_m * cfg_.dbscan_eps_m;
+    };
+    cluster_label_.fill(-1);
+    int clusters = 0;
+    for (int s = 0; s < m; ++s) {  // <= kMaxObservations
+      if (cluster_label_[s] >= 0) continue;
+      int head = 0, tail = 0;
+      cluster_label_[s] = static_cast<std::int8_t>(clusters);
+      queue[tail++] = static_cast<std::int8_t>(s);
+      while (head < tail) {  // each observation is queued once: <= kMaxObservations
+        const int p = queue[head++];
+        for (int q = 0; q < m; ++q) {  // <= kMaxObservations
+          if (cluster_label_[q] < 0 && near(p, q)) {
+            cluster_label_[q] = static_cast<std::int8_t>(clusters);
+            queue[tail++] = static_cast<std::int8_t>(q);
+          }
+        }
+      }
+      ++clusters;
+    }
+    return clusters;
+  }
+  /// check_hypotheses() with cluster_first, cluster c (its seeds scored alone by seed_hypotheses:
+  /// every other observation skipped): the association's pairs, and one per compatible landmark of
+  /// its ambiguous observations, each grown by nearest neighbour at the pose its pairs left (the
+  /// members resolved against the unit's posterior). When the best conflicts with the
+  /// association's, leads it by hypothesis_margin_nats and pairs kMinPosePairs or more, its pairs
+  /// replace the association's in the cluster: an observation it leaves unexplained is kUnmatched
+  /// unless the association made it new or paired it outside the frozen map; an observation
+  /// elsewhere paired with a landmark it took is kUnmatched. Out of line and cold (a sibling of
+  /// seed_hypotheses in the call chain). @return the observations paired anew
+  /// O(kMaxObservations (kMaxSeeds + kMaxObservations kMaxLandmarks))
+  [[gnu::noinline, gnu::cold]] int pair_cluster(const Observations<T, B>& obs, Association<T, B>& assoc, int c,
+                                                int seeds, const Pose2<T>& xp, const Mat3<T>& Pxx,
+                                                const reloc::SetModel<T>& model, T gate) {
+    const int m = obs.count;
+    if (seeds <= 1) return 0;
+    int best = 0;
+    for (int s = 1; s < seeds; ++s) {  // <= kMaxSeeds
+      if (seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll) best = s;
+    }
+    const std::int16_t* const bp = seed_pick_[static_cast<std::size_t>(best)].data();
+    if (best == 0 || !reloc::conflict(bp, seed_pick_[0].data(), m) ||
+        seed_[static_cast<std::size_t>(best)].ll < seed_[0].ll + cfg_.hypothesis_margin_nats ||
+        reloc::pairs(bp, m) < reloc::kMinPosePairs) {
+      return 0;
+    }
+    // The best again, for its d2s (deterministic: the same pairs), in seed 0's place.
+    align_ws_.pick = seed_pick_[static_cast<std::size_t>(best)];
+    reloc::PoseHypothesis<T>& h = seed_[0];
+    h.x = xp;
+    h.P = Pxx;
+    (void)reloc::run_hypothesis(obs, align_ws_, model, loop_align_, gate, true, h);
+    int regrouped = 0;
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      const int k = align_ws_.pick[i];
+      const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
+      if (cluster_label_[i] == c) {
+        if (k >= 0) {
+          regrouped += j != align_slam_[static_cast<std::size_t>(k)];
+          pair_with(assoc, i, align_slam_[static_cast<std::size_t>(k)], align_ws_.pick_d2[i]);
+        } else if (j >= 0 && slam_.hits(j) >= policy_.confirm_hits) {  // in the frozen map
+          assoc.feature[i] = kUnmatched;
+          assoc.candidate[i] = -1;
+          ++regrouped;
+        }
+        continue;
+      }
+      // Elsewhere: a landmark this cluster took is not paired twice.
+      for (int q = 0; q < m && j >= 0; ++q) {  // <= kMaxObservations
+        if (cluster_label_[q] == c && align_ws_.pick[q] >= 0 &&
+            align_slam_[static_cast<std::size_t>(align_ws_.pick[q])] == j) {
+          assoc.feature[i] = kUnmatched;
+          assoc.candidate[i] = -1;
+          ++regrouped;
+          break;
+        }
+      }
+    }
+    return regrouped;
   }
 
   /// A committed closure's rounds (commit()): the paired observations ranked by their landmark's
@@ -981,7 +1101,7 @@ class SlamStep {
       }
       if (bi < 0 || !(best > cfg_.gate.individual) || !(best <= gate_)) continue;
       out.feature[bi] = kUnmatched;
-      remember_mover(inverse_observe(x, obs.z[bi]));
+      remember_mover(inverse_observe(x, slam_.mount(), obs.z[bi]));
     }
   }
   /// A point within kMoverReach_m of a remembered mover.
@@ -1012,7 +1132,7 @@ class SlamStep {
     const Pose2<T> x = slam_.pose();
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       if (out.feature[i] != kNewFeature) continue;
-      const Vec2<T> p = inverse_observe(x, obs.z[i]);
+      const Vec2<T> p = inverse_observe(x, slam_.mount(), obs.z[i]);
       for (int k = 0; k < mover_count_; ++k) {  // <= kMaxMovers
         Mover& mv = movers_[static_cast<std::size_t>(k)];
         if ((p - mv.at).norm() < kMoverReach_m) {
@@ -1194,6 +1314,7 @@ class SlamStep {
   Mat3<T> window_cov_;
   std::array<reloc::PoseHypothesis<T>, reloc::kMaxSeeds> seed_;
   std::array<std::array<std::int16_t, B::kMaxObservations>, reloc::kMaxSeeds> seed_pick_{};
+  std::array<std::int8_t, B::kMaxObservations> cluster_label_{};  ///< label_clusters()' clusters
   std::array<std::array<std::int16_t, B::kMaxObservations>, reloc::kMaxHypotheses> window_pick_{};
   std::array<std::array<T, B::kMaxObservations>, reloc::kMaxHypotheses> window_d2_{};
   bool holding_ = false;

@@ -111,6 +111,8 @@ struct AlignWorkspace {
   /// Per observation: left out of the alignment (no base pair, never an inlier, no term of the set
   /// likelihood); the caller's, reset by clear_map().
   std::array<bool, B::kMaxObservations> skip{};
+  /// Where the sensor sits on the robot (the filter's; kept by clear_map()).
+  Mount<T> mount{};
   void clear_map() {
     n = 0;
     skip.fill(false);
@@ -330,13 +332,13 @@ template <typename T, class B>
 [[gnu::cold]] int misses(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& opt) {
   int expected = 0;
   for (int j = 0; j < ws.n; ++j) {  // <= kMaxLandmarks
-    const Vec2<T> z = observe(x, ws.m[j]);
+    const Vec2<T> z = observe(x, ws.mount, ws.m[j]);
     expected += z.x() >= opt.min_range_m && z.x() <= opt.max_range_m && std::abs(z.y()) <= opt.half_fov_rad;
   }
   int paired = 0;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     if (ws.pick[i] < 0) continue;
-    const Vec2<T> z = observe(x, ws.m[ws.pick[i]]);
+    const Vec2<T> z = observe(x, ws.mount, ws.m[ws.pick[i]]);
     paired += z.x() >= opt.min_range_m && z.x() <= opt.max_range_m && std::abs(z.y()) <= opt.half_fov_rad;
   }
   return expected - paired;
@@ -425,12 +427,12 @@ template <typename T, class B>
     ws.index[k] = ij;
   }
   for (int j = 0; j < n; ++j) map_tr = std::max(map_tr, ws.P[j].trace());  // <= kMaxLandmarks
-  // Observed points and their covariances (the sensor frame is the robot's).
+  // Observed points and their covariances in the robot's frame (through the sensor's mount).
   const Pose2<T> origin{};
   Mat23<T>* const no_pose_jacobian = nullptr;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     Mat2<T> J;
-    ws.q[i] = inverse_observe(origin, obs.z[i], no_pose_jacobian, &J);
+    ws.q[i] = inverse_observe(origin, ws.mount, obs.z[i], no_pose_jacobian, &J);
     ws.S[i] = J * obs.R[i] * J.transpose();
     ws.radius[i] = std::sqrt(opt.gate_d2 * (ws.S[i].trace() + map_tr));  // >= the gate's extent
   }

@@ -67,19 +67,22 @@ struct WindowStats {
   int hypotheses = 0;  ///< kept in the window after this scan
   int held = 0;        ///< observations held (kOpened, kHeld, kExpired) or re-paired (kCommitted)
   T lead = T(0);       ///< the leader's score over the runner-up's [nats] (window open)
+  int regrouped = 0;   ///< observations cluster_first paired anew (before the window's part)
 };
 
 namespace window_detail {
 
 /// Range-bearing innovation of observation i against frozen landmark j at (x, P): nu, S, Jx.
-/// @return d2 = nu^T S^-1 nu; +inf when S is not positive definite or the landmark is at the pose.
+/// @return d2 = nu^T S^-1 nu; +inf when S is not positive definite or the landmark is at the
+///         sensor (map.mount on the robot at x).
 template <typename T, class B>
 T pair_d2(const Observations<T, B>& obs, int i, const AlignWorkspace<T, B>& map, int j, const Pose2<T>& x,
           const Mat3<T>& P, Vec2<T>& nu, Mat2<T>& S, Mat23<T>& Jx) {
-  const Vec2<T> d = map.m[j] - Vec2<T>(x.x, x.y);
+  const Pose2<T> xs = sensor_pose(x, map.mount);
+  const Vec2<T> d = map.m[j] - Vec2<T>(xs.x, xs.y);
   if (!(d.squaredNorm() > T(1e-12))) return std::numeric_limits<T>::infinity();
   Mat2<T> Jl;
-  const Vec2<T> h = observe(x, map.m[j], &Jx, &Jl);
+  const Vec2<T> h = observe(x, map.mount, map.m[j], &Jx, &Jl);
   nu = innovation(obs.z[i], h);
   S = Jx * P * Jx.transpose() + Jl * map.P[j] * Jl.transpose() + obs.R[i];
   const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);

@@ -42,6 +42,7 @@ struct ReportRow {
   int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
   int windows = 0, window_commits = 0, window_held_scans = 0;  ///< hypothesis windows: opened, committed, scans open
+  int regrouped = 0;                                           ///< observations cluster_first paired anew
   int merges = 0;                                              ///< duplicates merged after closures (loop_merge_d2)
   int not_augmented = 0, full_runs = 0;  ///< observations not added (the map full), and runs whose map filled
   double reloc_error_m = NAN;            ///< mean position error after the kidnap [m]
@@ -142,16 +143,17 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
         "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
         "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
         "duplicates merged; a landmark's false pairs by place: another landmark of its group (MRCLAM: within a row of "
-        "tubes) or elsewhere; with --hypotheses, windows opened, committed and scans open\n");
-    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s %9s %10s %8s %9s %7s\n", "strategy", "runs > 5",
+        "tubes) or elsewhere; with --hypotheses, windows opened, committed and scans open; with --cluster-first, observations "
+        "paired anew\n");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s %9s %6s %7s %9s %10s %8s %9s %7s %9s\n", "strategy", "runs > 5",
                  "duplicate", "original", "clutter", "closures", "held", "merged", "in group", "elsewhere", "windows",
-                 "committed", "open");
+                 "committed", "open", "regrouped");
     for (const ReportRow& r : rows) {
       if (r.runs > 0)
-        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d %9d %10d %8d %9d %7d\n", r.name.c_str(),
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d %9d %6d %7d %9d %10d %8d %9d %7d %9d\n", r.name.c_str(),
                      r.runs_over_5_fp, r.fp_to_duplicate, r.fp_to_original, r.fp_clutter, r.loop_commits,
                      r.loop_held_scans, r.merges, r.fp_in_group, r.fp_other_group, r.windows, r.window_commits,
-                     r.window_held_scans);
+                     r.window_held_scans, r.regrouped);
     }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
@@ -219,6 +221,7 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"hypothesis_windows", r.windows},
                  {"hypothesis_windows_committed", r.window_commits},
                  {"hypothesis_window_scans", r.window_held_scans},
+                 {"cluster_first_regrouped", r.regrouped},
                  {"landmarks_merged", r.merges},
                  {"runs_map_full", r.full_runs},
                  {"not_augmented", r.not_augmented},

@@ -31,6 +31,7 @@ struct RunAggregate {
   int runs_over_5_fp = 0;                                      ///< runs with more than 5 false pairs
   int loop_commits = 0, loop_held_scans = 0;                   ///< RunResult's, summed
   int windows = 0, window_commits = 0, window_held_scans = 0;  ///< RunResult's, summed
+  int regrouped = 0;                                           ///< observations cluster_first paired anew
   int merges = 0;                                              ///< RunResult's, summed
   int not_augmented = 0, full_runs = 0;                        ///< RunResult's, summed; runs whose map filled
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs

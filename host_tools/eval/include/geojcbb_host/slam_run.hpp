@@ -70,7 +70,7 @@ struct MapLandmark {
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
 /// the relocaliser, L the loop-closure check, T tentative landmarks isolated, H the hypothesis
-/// window (kPresetRivals kept beside the best). kRobustPreset names the preset with V, R and L.
+/// window (kPresetRivals kept beside the best), C clusters paired first. kRobustPreset names the preset with V, R and L.
 struct Method {
   Strategy strategy = Strategy::kGeojcbb;
   bool oracle = false;
@@ -79,6 +79,7 @@ struct Method {
   bool loop_check = false;  ///< StepSettings::loop_check switched in
   bool tentative = false;   ///< StepSettings::tentative_isolated switched in
   bool window = false;      ///< StepSettings::hypothesis_rivals (kPresetRivals) switched in
+  bool clusters = false;    ///< StepSettings::cluster_first switched in
   std::string name() const {
     if (oracle) return "TRUTH";
     std::string n = to_string(strategy);
@@ -88,6 +89,7 @@ struct Method {
     if (loop_check) suffix += 'L';
     if (tentative) suffix += 'T';
     if (window) suffix += 'H';
+    if (clusters) suffix += 'C';
     return suffix.empty() ? n : n + "+" + suffix;
   }
   void apply(RunOptions& o) const {
@@ -98,6 +100,7 @@ struct Method {
     o.step.loop_check = o.step.loop_check || loop_check;
     o.step.tentative_isolated = o.step.tentative_isolated || tentative;
     if (window && o.step.hypothesis_rivals == 0) o.step.hypothesis_rivals = kPresetRivals;
+    o.step.cluster_first = o.step.cluster_first || clusters;
   }
   /// The rivals the suffix H keeps beside the best (unless --hypothesis-rivals sets them).
   static constexpr int kPresetRivals = 2;
@@ -114,8 +117,8 @@ constexpr const char* kRobustPreset = "PCJCBB+RL";
 /// The presets as the tools' help texts name them.
 constexpr const char* kPresetsHelp =
     "ICNN, JCBB, KJCBB, DFJCBB, GEMJCBB, GEOJCBB, PCJCBB, each optionally with +V (verification), +R (relocaliser), "
-    "+L (loop-closure check), +T (tentative landmarks isolated), +H (hypothesis window) or a combination "
-    "(+VRLTH); PCJCBB+RL is the robust preset";
+    "+L (loop-closure check), +T (tentative landmarks isolated), +H (hypothesis window), +C (clusters paired "
+    "first) or a combination (+VRLTHC); PCJCBB+RL is the robust preset";
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
 struct StepRecord {
@@ -162,6 +165,7 @@ struct RunResult {
   int windows = 0;                     ///< hypothesis windows opened (hypotheses)
   int window_commits = 0;              ///< windows that committed a leader
   int window_held_scans = 0;           ///< scans a window was open (the opening one included)
+  int regrouped = 0;                   ///< observations cluster_first paired anew
   int merges = 0;                      ///< duplicates merged after a closure (loop_merge_d2)
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,

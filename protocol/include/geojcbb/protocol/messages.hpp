@@ -178,6 +178,9 @@ struct Config : Codec<Config> {
   float min_range_m = 0.0f;                 ///< >= 0
   float max_range_m = 10.0f;                ///< > min_range_m
   float half_fov_rad = kPiF;                ///< (0, pi]
+  float sensor_x_m = 0.0f;                  ///< the sensor's mount on the robot: ahead [-100, 100]
+  float sensor_y_m = 0.0f;                  ///< to the left [-100, 100]
+  float sensor_theta_rad = 0.0f;            ///< its heading [-pi, pi]
   std::uint8_t confirm_hits = 2;            ///< hits that confirm a tentative landmark, >= 1
   std::uint8_t max_misses = 2;              ///< misses in view that remove a tentative landmark, >= 1
   std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
@@ -224,6 +227,7 @@ struct Config : Codec<Config> {
   std::uint8_t hypothesis_window_scans = 5;   ///< 1 .. 32
   float hypothesis_margin_nats = 3.0f;        ///< > 0
   bool hypothesis_hold = false;               ///< disputed observations held while a window is open
+  bool cluster_first = false;                 ///< each cluster of observations paired as a unit first
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -246,6 +250,11 @@ struct Config : Codec<Config> {
         field("min_range_m", &Config::min_range_m, range::not_below(0.0f), "m"),
         field("max_range_m", &Config::max_range_m, range::finite(), "m", "> `min_range_m`"),
         field("half_fov_rad", &Config::half_fov_rad, range::interval(0.0f, kPiF, true, false), "rad"),
+        field("sensor_x_m", &Config::sensor_x_m, range::interval(-100.0f, 100.0f, false, false), "m",
+              "the sensor's mount: ahead of the motion model's point"),
+        field("sensor_y_m", &Config::sensor_y_m, range::interval(-100.0f, 100.0f, false, false), "m", "to the left"),
+        field("sensor_theta_rad", &Config::sensor_theta_rad, range::interval(-kPiF, kPiF, false, false), "rad",
+              "its heading on the robot"),
         field("confirm_hits", &Config::confirm_hits, range::at_least(1), "", "hits that confirm a tentative landmark"),
         field("max_misses", &Config::max_misses, range::at_least(1), "",
               "misses in view that remove a tentative landmark"),
@@ -302,6 +311,8 @@ struct Config : Codec<Config> {
         field("hypothesis_margin_nats", &Config::hypothesis_margin_nats, range::above(0.0f), "nats"),
         field("hypothesis_hold", &Config::hypothesis_hold, range::one_of(0, 1), "",
               "disputed observations held while a window is open"),
+        field("cluster_first", &Config::cluster_first, range::one_of(0, 1), "",
+              "each cluster of observations paired as a unit first, its members at that posterior"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -720,7 +731,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 138 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 151 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
