@@ -106,7 +106,7 @@ template <typename T>
   if (m.at_origin()) return observe(x_r, l, J_z_pose, J_z_landmark);
   Mat3<T> J_s;
   const Pose2<T> x_s = sensor_pose(x_r, m, J_z_pose != nullptr ? &J_s : nullptr);
-  const Vec2<T> z = observe(x_s, l, J_z_pose, J_z_landmark);
+  Vec2<T> z = observe(x_s, l, J_z_pose, J_z_landmark);
   if (J_z_pose != nullptr) *J_z_pose = (*J_z_pose * J_s).eval();
   return z;
 }
@@ -120,7 +120,7 @@ template <typename T>
   if (m.at_origin()) return inverse_observe(x_r, z, J_l_pose, J_l_z);
   Mat3<T> J_s;
   const Pose2<T> x_s = sensor_pose(x_r, m, J_l_pose != nullptr ? &J_s : nullptr);
-  const Vec2<T> l = inverse_observe(x_s, z, J_l_pose, J_l_z);
+  Vec2<T> l = inverse_observe(x_s, z, J_l_pose, J_l_z);
   if (J_l_pose != nullptr) *J_l_pose = (*J_l_pose * J_s).eval();
   return l;
 }

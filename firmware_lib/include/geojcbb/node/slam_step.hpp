@@ -929,7 +929,7 @@ class SlamStep {
   /// O(kMaxObservations^2)
   [[gnu::noinline, gnu::cold]] int label_clusters(const Observations<T, B>& obs) {
     const int m = obs.count;
-    std::array<std::int8_t, B::kMaxObservations> queue;
+    std::array<std::uint8_t, B::kMaxObservations> queue;
     auto near = [&](int p, int q) {
       const T rp = obs.z[p].x(), rq = obs.z[q].x();
       return rp * rp + rq * rq - T(2) * rp * rq * fmath::cos(obs.z[p].y() - obs.z[q].y()) <=
@@ -941,13 +941,13 @@ class SlamStep {
       if (cluster_label_[s] >= 0) continue;
       int head = 0, tail = 0;
       cluster_label_[s] = static_cast<std::int8_t>(clusters);
-      queue[tail++] = static_cast<std::int8_t>(s);
+      queue[tail++] = static_cast<std::uint8_t>(s);
       while (head < tail) {  // each observation is queued once: <= kMaxObservations
         const int p = queue[head++];
         for (int q = 0; q < m; ++q) {  // <= kMaxObservations
           if (cluster_label_[q] < 0 && near(p, q)) {
             cluster_label_[q] = static_cast<std::int8_t>(clusters);
-            queue[tail++] = static_cast<std::int8_t>(q);
+            queue[tail++] = static_cast<std::uint8_t>(q);
           }
         }
       }
