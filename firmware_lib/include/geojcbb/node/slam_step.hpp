@@ -489,10 +489,10 @@ class SlamStep {
   /// leader, close it with nothing committed. Meanwhile the association's pairs stand; with
   /// hypothesis_hold, an observation the hypotheses pair differently is held (kUnmatched; a scan
   /// with no pair left is not reviewed). A loop closure's scan (pending or committed) closes it.
-  /// @return kOk; kInvalidInput when not configured or for a count mismatch; the statuses of
-  ///         AlignWorkspace::push_landmark (then `assoc` unchanged, the window closed).
   /// With cluster_first, each cluster of observations is paired as a unit first (pair_cluster),
   /// on every tracked scan with the window closed, before the window's part.
+  /// @return kOk; kInvalidInput when not configured or for a count mismatch; the statuses of
+  ///         AlignWorkspace::push_landmark (then `assoc` unchanged, the window closed).
   [[nodiscard, gnu::noinline, gnu::cold]] Status check_hypotheses(const Observations<T, B>& obs,
                                                                   Association<T, B>& assoc,
                                                                   reloc::WindowStats<T>& out) {
@@ -507,7 +507,7 @@ class SlamStep {
     align_ws_.clear_map();
     for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
       const int j = slam_.index_of(pred_.id[a]);
-      if (j < 0 || slam_.hits(j) < policy_.confirm_hits) continue;
+      if (!frozen(j)) continue;
       align_slam_[static_cast<std::size_t>(align_ws_.n)] = static_cast<std::int16_t>(j);
       const Status st = align_ws_.push_landmark(slam_.landmark(j), landmark_covariance(j));
       if (st != Status::kOk) {
@@ -544,10 +544,7 @@ class SlamStep {
       const int seeds = seed_hypotheses(obs, assoc, xp, Pxx, model, gate);
       out.seeds = seeds;
       if (seeds <= 1) return Status::kOk;
-      int best = 0;
-      for (int s = 1; s < seeds; ++s) {  // <= kMaxSeeds
-        if (seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll) best = s;
-      }
+      const int best = best_seed(seeds);
       const std::int16_t* const bp = seed_pick_[static_cast<std::size_t>(best)].data();
       bool rival = false;
       for (int s = 0; s < seeds; ++s) {  // <= kMaxSeeds
@@ -816,6 +813,17 @@ class SlamStep {
       if (pred_.id[a] == assoc.feature[i]) assoc.candidate[i] = static_cast<std::int16_t>(a);
     }
   }
+  /// Landmark j (a filter index, or -1) is in the frozen map the window and the clusters are scored
+  /// against: confirmed by its hits.
+  bool frozen(int j) const { return j >= 0 && slam_.hits(j) >= policy_.confirm_hits; }
+  /// The seed of the highest set likelihood among the first `seeds` (the first of equals).
+  int best_seed(int seeds) const {
+    int best = 0;
+    for (int s = 1; s < seeds; ++s) {  // <= kMaxSeeds
+      if (seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll) best = s;
+    }
+    return best;
+  }
   /// check_hypotheses() while the window is open: an observation every hypothesis pairs with the
   /// same landmark is paired so; every other is held (kUnmatched). A scan with no pair left is no
   /// evidence for the review (commit() skips it). @return the observations held
@@ -829,7 +837,7 @@ class SlamStep {
         agreed = window_pick_[static_cast<std::size_t>(h)][static_cast<std::size_t>(i)] == k;
       }
       const int j = assoc.feature[i] >= 0 ? slam_.index_of(assoc.feature[i]) : -1;
-      if (agreed && k < 0 && (j < 0 || slam_.hits(j) < policy_.confirm_hits)) {
+      if (agreed && k < 0 && !frozen(j)) {
         // No hypothesis pairs it with the frozen map: the association's answer (new, or a
         // tentative landmark) stands.
         pairings += assoc.feature[i] >= 0;
@@ -970,10 +978,7 @@ class SlamStep {
                                                 const reloc::SetModel<T>& model, T gate) {
     const int m = obs.count;
     if (seeds <= 1) return 0;
-    int best = 0;
-    for (int s = 1; s < seeds; ++s) {  // <= kMaxSeeds
-      if (seed_[static_cast<std::size_t>(s)].ll > seed_[static_cast<std::size_t>(best)].ll) best = s;
-    }
+    const int best = best_seed(seeds);
     const std::int16_t* const bp = seed_pick_[static_cast<std::size_t>(best)].data();
     if (best == 0 || !reloc::conflict(bp, seed_pick_[0].data(), m) ||
         seed_[static_cast<std::size_t>(best)].ll < seed_[0].ll + cfg_.hypothesis_margin_nats ||
@@ -994,7 +999,7 @@ class SlamStep {
         if (k >= 0) {
           regrouped += j != align_slam_[static_cast<std::size_t>(k)];
           pair_with(assoc, i, align_slam_[static_cast<std::size_t>(k)], align_ws_.pick_d2[i]);
-        } else if (j >= 0 && slam_.hits(j) >= policy_.confirm_hits) {  // in the frozen map
+        } else if (frozen(j)) {
           assoc.feature[i] = kUnmatched;
           assoc.candidate[i] = -1;
           ++regrouped;
