@@ -32,7 +32,7 @@ endfunction()
 #                       STACK bytes)
 # builds NAME.elf: port/common's main loop with the node at `type` (a geojcbb::Bounds) on board `lib`.
 function(geojcbb_port_firmware name)
-  cmake_parse_arguments(F "" "BOARD;BOUNDS;FLASH_ORIGIN;FLASH;RAM_ORIGIN;RAM;STACK;OPTIMIZE" "" ${ARGN})
+  cmake_parse_arguments(F "" "BOARD;BOUNDS;FLASH_ORIGIN;FLASH;RAM_ORIGIN;RAM;STACK" "OPTIMIZE" ${ARGN})
   add_executable(${name} ${GEOJCBB_PORT_COMMON_DIR}/main.cpp)
   if(F_OPTIMIZE)  # after the build type's flags, so it wins (e.g. -O2 where -O3's unrolling overflows flash)
     target_compile_options(${name} PRIVATE ${F_OPTIMIZE})
