@@ -40,6 +40,8 @@
 #include "geojcbb_host/report.hpp"
 #include "geojcbb_host/run_cli.hpp"
 #include "geojcbb_host/event_log.hpp"
+#include "geojcbb_host/gps.hpp"
+#include "geojcbb_host/victoria_park.hpp"
 #include "geojcbb_host/slam_run.hpp"
 #include "geojcbb_host/stream.hpp"
 #include "geojcbb_host/svg_plot.hpp"
@@ -273,7 +275,78 @@ struct ReplayOptions {
   bool progress = true;
   int jobs = 0;
   RunOptions run;
+  GpsOptions gps;  ///< the screening (the antenna from the log's meta)
 };
+
+// The GPS table of a replay whose log has gps lines: per strategy the error of the estimated antenna
+// track at the screened fixes, the landmarks mapped, the mean NIS per pairing against its 95 %
+// bounds, and the replay's time.
+nlohmann::json gps_table(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg,
+                         const std::vector<GpsScore>& gps) {
+  nlohmann::json rows = nlohmann::json::array();
+  std::printf("\nGPS (the antenna's estimated track at each kept fix; %d fixes, %d rejected after a gap, %d jumps)\n",
+              gps.empty() ? 0 : gps[0].fixes, gps.empty() ? 0 : gps[0].after_gap, gps.empty() ? 0 : gps[0].jumps);
+  std::printf(
+      "| strategy | fixes used | RMSE [m] | max [m] (at t s) | landmarks | pairings | mean NIS [95 %% bounds] | time [s] |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    if (!agg[k].have_first) {
+      std::printf("| %s | failed: %s | | | | | | |\n", strategies[k].name().c_str(), agg[k].error.c_str());
+      rows.push_back({{"strategy", strategies[k].name()}, {"error", agg[k].error}});
+      continue;
+    }
+    const RunResult& r = agg[k].first;
+    const GpsScore& g = gps[k];
+    const double n = static_cast<double>(r.nis_pairings);
+    const double nis = n > 0 ? r.nis_sum / n : NAN, half = n > 0 ? 1.96 * 2 / std::sqrt(n) : NAN;  // mean of chi2(2)
+    std::printf("| %s | %d | %.2f | %.2f (%.0f) | %d | %ld | %.2f [%.2f, %.2f] | %.2f |\n",
+                strategies[k].name().c_str(), g.used, g.rmse_m, g.max_m, g.max_at_s, r.landmarks, r.nis_pairings, nis,
+                2 - half, 2 + half, agg[k].run_s);
+    rows.push_back({{"strategy", strategies[k].name()},
+                    {"fixes_used", g.used},
+                    {"fixes_unmatched", g.unmatched},
+                    {"rmse_m", g.rmse_m},
+                    {"max_m", g.max_m},
+                    {"max_at_s", g.max_at_s},
+                    {"landmarks", r.landmarks},
+                    {"not_augmented", r.not_augmented},
+                    {"pairings", r.nis_pairings},
+                    {"mean_nis", nis},
+                    {"nis_bounds", {2 - half, 2 + half}},
+                    {"time_s", agg[k].run_s}});
+  }
+  return rows;
+}
+
+// The path and map figure of a replay scored by GPS: the estimated antenna track over the kept fixes.
+svg::Panel gps_panel(const std::string& title, const RunResult& r, const std::vector<replay::GpsEvent>& fixes,
+                     const GpsOptions& o) {
+  svg::Panel p;
+  p.title = title;
+  p.xlabel = "x (east) [m]";
+  p.ylabel = "y (north) [m]";
+  p.equal_aspect = true;
+  GpsScore counts;
+  svg::Series g{"GPS fixes kept", {}, {}, svg::Style::kMarkersDot, "#000000"};
+  for (const replay::GpsEvent& f : screen_gps(fixes, o, counts)) {
+    g.x.push_back(f.x);
+    g.y.push_back(f.y);
+  }
+  svg::Series est{"estimated antenna track", {}, {}, svg::Style::kLine, "#D55E00"};
+  const std::size_t step = std::max<std::size_t>(1, r.trace.size() / svg::kMaxLinePoints);
+  for (std::size_t k = 0; k < r.trace.size(); k += step) {
+    const Pose2<double>& x = r.trace[k].pose;
+    est.x.push_back(x.x + std::cos(x.theta) * o.antenna_x_m - std::sin(x.theta) * o.antenna_y_m);
+    est.y.push_back(x.y + std::sin(x.theta) * o.antenna_x_m + std::cos(x.theta) * o.antenna_y_m);
+  }
+  svg::Series map{"landmarks mapped", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
+  for (const MapLandmark& m : r.map) {
+    map.x.push_back(m.x);
+    map.y.push_back(m.y);
+  }
+  p.series = {g, est, map};
+  return p;
+}
 
 int run_replay(const ReplayOptions& o) {
   const replay::EventLog log = replay::read_event_log(o.log);
@@ -292,6 +365,10 @@ int run_replay(const ReplayOptions& o) {
   const replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
   const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
   RunOptions base = o.run;
+  base.record_trace = !log.gps.empty();
+  GpsOptions gps_opt = o.gps;
+  if (log.meta.count("gps_x_m")) gps_opt.antenna_x_m = log.meta.at("gps_x_m");
+  if (log.meta.count("gps_y_m")) gps_opt.antenna_y_m = log.meta.at("gps_y_m");
   if (o.group_radius_m > 0) {
     if (positions.empty()) throw std::runtime_error("--group-radius needs the landmark positions (landmark lines)");
     base.landmark_group = replay::landmark_groups(positions, o.group_radius_m);
@@ -309,9 +386,10 @@ int run_replay(const ReplayOptions& o) {
     with_truth += in.scan && in.have_truth;
   }
   std::printf(
-      "== %s: %zu odom, %zu meas, %zu truth, %zu landmark lines; %d scans (%d with a true pose), %d predictions\n",
-      o.log.c_str(), log.odometry.size(), log.measurements.size(), log.truth.size(), log.landmarks.size(), scans,
-      with_truth, predictions);
+      "== %s: %zu odom, %zu odom_delta, %zu meas, %zu truth, %zu gps, %zu landmark lines; %d scans (%d with a true "
+      "pose), %d predictions\n",
+      o.log.c_str(), log.odometry.size(), log.increments.size(), log.measurements.size(), log.truth.size(),
+      log.gps.size(), log.landmarks.size(), scans, with_truth, predictions);
   {
     auto g = [](double v, const char* unit) {
       char b[48] = "not given";
@@ -353,6 +431,19 @@ int run_replay(const ReplayOptions& o) {
     failures += agg[k].failed;
   }
   print_tables(rows, stdout, labelled);
+  std::vector<GpsScore> gps(strategies.size());
+  nlohmann::json gps_rows;
+  if (!log.gps.empty()) {
+    for (std::size_t k = 0; k < strategies.size(); ++k)
+      if (agg[k].have_first) gps[k] = score_gps(agg[k].first.trace, log.gps, gps_opt);
+    gps_rows = gps_table(strategies, agg, gps);
+    std::ofstream e(o.out_dir + "/gps_error.csv");  // per strategy and kept fix: time and error
+    e << "strategy,t_s,error_m\n";
+    for (std::size_t k = 0; k < strategies.size(); ++k)
+      for (std::size_t i = 0; i < gps[k].t.size(); ++i)
+        e << strategies[k].name() << ',' << gps[k].t[i] << ',' << gps[k].error_m[i] << '\n';
+    if (!e) throw std::runtime_error("cannot write " + o.out_dir + "/gps_error.csv");
+  }
   if (labelled) {
     print_summary(rows, group_rows, stdout, "run");
     if (o.group_radius_m > 0) {
@@ -387,6 +478,15 @@ int run_replay(const ReplayOptions& o) {
     js["wall_s"] = wall_s;
     js["strategies"] = rows_json(rows);
     if (o.group_radius_m > 0) js["group_level"] = rows_json(group_rows);
+    if (!log.gps.empty()) {
+      js["gps"] = {{"fixes", gps[0].fixes},
+                   {"rejected_after_gap", gps[0].after_gap},
+                   {"rejected_jumps", gps[0].jumps},
+                   {"max_gap_s", gps_opt.max_gap_s},
+                   {"max_jump_m", gps_opt.max_jump_m},
+                   {"antenna", {gps_opt.antenna_x_m, gps_opt.antenna_y_m}},
+                   {"strategies", gps_rows}};
+    }
     std::ofstream(o.out_dir + "/replay.json") << js.dump(2) << '\n';
     if (!csv) throw std::runtime_error("cannot write " + o.out_dir + "/replay.csv");
   }
@@ -394,8 +494,17 @@ int run_replay(const ReplayOptions& o) {
     svg::Figure path;
     path.title = "Path and map, " + fs::path(o.log).filename().string();
     path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
-    for (std::size_t k = 0; k < strategies.size(); ++k)
-      if (agg[k].have_first) path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      if (!agg[k].have_first) continue;
+      if (log.gps.empty()) {
+        path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
+      } else {
+        char t[96];
+        std::snprintf(t, sizeof t, "%s: GPS RMSE %.2f m, %d landmarks", strategies[k].name().c_str(), gps[k].rmse_m,
+                      agg[k].first.landmarks);
+        path.panels.push_back(gps_panel(t, agg[k].first, log.gps, gps_opt));
+      }
+    }
     svg::write(path, o.out_dir + "/replay_path.svg");
   }
   std::printf("\n%zu replays in %.1f s; per-strategy rows: %s/replay.csv, summary: %s/replay.json%s\n",
@@ -459,6 +568,36 @@ int run_convert(const ConvertOptions& c) {
   std::printf("%s: %zu odom, %zu meas, %zu empty scans, %zu truth, %zu landmark lines (%s)\n", c.out.c_str(),
               out.odometry.size(), out.measurements.size(), out.empty_scans.size(), out.truth.size(),
               out.landmarks.size(), what.c_str());
+  return 0;
+}
+
+// Victoria Park as a log (docs/victoria_park.md): the rear axle's increments, the laser's mount,
+// the detections kept, GPS.
+struct VictoriaOptions {
+  std::string data_dir, out;
+  victoria_park::ConvertOptions model;
+};
+
+int run_convert_victoria(const VictoriaOptions& c) {
+  const std::string dir = c.data_dir.empty() ? victoria_park::default_data_dir() : c.data_dir;
+  const victoria_park::Data data = victoria_park::read(dir);
+  const replay::EventLog out = victoria_park::to_log(data, c.model);
+  if (fs::path(c.out).has_parent_path()) fs::create_directories(fs::path(c.out).parent_path());
+  std::ofstream f(c.out);
+  if (!f) throw std::runtime_error(c.out + ": cannot write");
+  const victoria_park::ConvertOptions& m = c.model;
+  char what[512];
+  std::snprintf(what, sizeof what,
+                "Victoria Park (ACFR; Guivant and Nebot 2001) from %s\n"
+                "reference point: the rear axle's centre; odometry noise per 40 Hz sample: speed %.3g m/s, steering "
+                "%.3g rad\ndetections kept: %.3g to %.3g m, |bearing| <= %.3g rad; R = diag(%.3g m, %.3g rad)^2",
+                dir.c_str(), m.sigma_speed_mps, m.sigma_steer_rad, m.min_range_m, m.max_range_m, m.max_bearing_rad,
+                m.sigma_range_m, m.sigma_bearing_rad);
+  replay::write_event_log(out, f, what);
+  f.close();
+  if (!f) throw std::runtime_error(c.out + ": cannot write");
+  std::printf("%s: %zu odom_delta, %zu meas, %zu empty scans, %zu gps lines\n", c.out.c_str(), out.increments.size(),
+              out.measurements.size(), out.empty_scans.size(), out.gps.size());
   return 0;
 }
 
@@ -691,8 +830,54 @@ int run(int argc, char** argv) {
   cv->add_option("--model-inflation", co.model.model_inflation, "as for mrclam")->default_val(co.model.model_inflation);
   cv->add_flag("--drop-other-robots", co.model.drop_other_robots, "as for mrclam");
 
+  VictoriaOptions vo;
+  auto* vp =
+      app.add_subcommand("convert-victoria-park",
+                         "write ACFR's Victoria Park as a log of docs/replay.md's format (docs/victoria_park.md): "
+                         "pose increments of the rear axle, the laser's mount, detections, GPS; replay it with "
+                         "`replay --log`");
+  {
+    victoria_park::ConvertOptions& m = vo.model;
+    vp->add_option("--data", vo.data_dir,
+                   "the folder of the four CSV files (default $GEOJCBB_VICTORIA_PARK_DIR, else "
+                   "../shared/data/victoria_park beside the repository)");
+    vp->add_option("--out", vo.out, "the log file to write")->required();
+    vp->add_option("--sigma-speed", m.sigma_speed_mps, "speed noise per 40 Hz odometry sample [m/s]")
+        ->default_val(m.sigma_speed_mps)
+        ->check(CLI::Range(0.0, 100.0));
+    vp->add_option("--sigma-steer", m.sigma_steer_rad, "steering noise per sample [rad]")
+        ->default_val(m.sigma_steer_rad)
+        ->check(CLI::Range(0.0, 1.0));
+    vp->add_option("--sigma-range", m.sigma_range_m, "range noise of a detection [m]")
+        ->default_val(m.sigma_range_m)
+        ->check(CLI::Range(1e-6, 100.0));
+    vp->add_option("--sigma-bearing", m.sigma_bearing_rad, "bearing noise of a detection [rad]")
+        ->default_val(m.sigma_bearing_rad)
+        ->check(CLI::Range(1e-6, 1.0));
+    vp->add_option("--min-range", m.min_range_m, "detections nearer are dropped [m]")
+        ->default_val(m.min_range_m)
+        ->check(CLI::Range(0.0, 100.0));
+    vp->add_option("--max-range", m.max_range_m, "detections farther are dropped [m]")
+        ->default_val(m.max_range_m)
+        ->check(CLI::Range(1.0, 100.0));
+    vp->add_option("--max-bearing", m.max_bearing_rad, "detections wider are dropped [rad]")
+        ->default_val(m.max_bearing_rad)
+        ->check(CLI::Range(0.01, 1.5708));
+    vp->add_option("--start-theta", m.start_theta_rad, "the start heading [rad]")->default_val(m.start_theta_rad);
+    vp->add_option("--seconds", m.seconds, "only the first seconds of the run (0: all)")
+        ->default_val(m.seconds)
+        ->check(CLI::Range(0.0, 1e6));
+  }
+  rp->add_option("--gps-max-gap", ro.gps.max_gap_s, "a GPS fix after a longer dropout is not scored [s]")
+      ->default_val(ro.gps.max_gap_s)
+      ->check(CLI::Range(0.0, 1e6));
+  rp->add_option("--gps-max-jump", ro.gps.max_jump_m, "a GPS fix farther from the previous one is not scored [m]")
+      ->default_val(ro.gps.max_jump_m)
+      ->check(CLI::Range(0.0, 1e6));
+
   CLI11_PARSE(app, argc, argv);
   try {
+    if (vp->parsed()) return run_convert_victoria(vo);
     if (rp->parsed()) {
       if (rp_mrclam_rules) {
         const RunOptions m = mrclam_run_defaults();

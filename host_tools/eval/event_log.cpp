@@ -1,5 +1,6 @@
 #include "geojcbb_host/event_log.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -81,10 +82,25 @@ std::string fmt(double v) {
 }  // namespace
 
 const std::vector<std::string>& meta_keys() {
-  static const std::vector<std::string> k{"min_range_m",       "max_range_m",      "fov_rad",
-                                          "sigma_bearing_rad", "scan_tolerance_s", "start_x_m",
-                                          "start_y_m",         "start_theta_rad",  "start_var"};
+  static const std::vector<std::string> k{
+      "min_range_m",     "max_range_m", "fov_rad",    "sigma_bearing_rad", "scan_tolerance_s", "start_x_m", "start_y_m",
+      "start_theta_rad", "start_var",   "sensor_x_m", "sensor_y_m",        "sensor_theta_rad", "gps_x_m",   "gps_y_m"};
   return k;
+}
+
+Eigen::Matrix3d OdomDeltaEvent::covariance() const {
+  Eigen::Matrix3d c;
+  c << cov[0], cov[1], cov[2],  //
+      cov[1], cov[3], cov[4],   //
+      cov[2], cov[4], cov[5];
+  return c;
+}
+
+Eigen::Matrix2d MeasEvent::R() const {
+  const double c = rho * sigma_range * sigma_bearing;
+  Eigen::Matrix2d r;
+  r << sigma_range * sigma_range, c, c, sigma_bearing * sigma_bearing;
+  return r;
 }
 
 int EventLog::truth_index(const std::string& label) const {
@@ -123,7 +139,8 @@ EventLog read_event_log(std::istream& in, const std::string& name) {
   EventLog log;
   std::string raw;
   long n = 0;
-  double t_odom = -INFINITY, t_meas = -INFINITY, t_truth = -INFINITY;
+  double t_odom = -INFINITY, t_meas = -INFINITY, t_truth = -INFINITY, t_gps = -INFINITY;
+  long first_odom = 0, first_delta = 0;
   int labelled = 0, unlabelled = 0;
   long first_unlabelled = 0, first_labelled = 0;
   while (std::getline(in, raw)) {
@@ -141,18 +158,54 @@ EventLog read_event_log(std::istream& in, const std::string& name) {
         e.sigma_v = p.sigma(f[4], "sigma_v", true);  // no process noise (standing still) is a model
         e.sigma_w = p.sigma(f[5], "sigma_w", true);
       }
+      if (first_delta > 0)
+        fail(name, n,
+             "odom line in a log of odom_delta lines (line " + std::to_string(first_delta) + "): one or the other");
+      if (first_odom == 0) first_odom = n;
       check_time(t_odom, e.t, name, n, "odom");
       log.odometry.push_back(e);
+    } else if (kind == "odom_delta") {
+      p.count(f, 5, 11, "t,dx,dy,dtheta[,cxx,cxy,cxt,cyy,cyt,ctt]");
+      if (f.size() != 5 && f.size() != 11) fail(name, n, "'odom_delta' gives all 6 covariance terms, or none");
+      if (first_odom > 0)
+        fail(name, n,
+             "odom_delta line in a log of odom lines (line " + std::to_string(first_odom) + "): one or the other");
+      if (first_delta == 0) first_delta = n;
+      OdomDeltaEvent e{p.number(f[1], "t"), p.number(f[2], "dx"), p.number(f[3], "dy"), p.number(f[4], "dtheta")};
+      if (std::abs(e.dtheta) > 3.2) fail(name, n, "dtheta: must be in [-pi, pi] rad, not " + f[4]);
+      if (f.size() == 11) {
+        static const char* const names[6] = {"cxx", "cxy", "cxt", "cyy", "cyt", "ctt"};
+        for (std::size_t k = 0; k < 6; ++k) e.cov[k] = p.number(f[5 + k], names[k]);
+        e.has_cov = true;
+        // Positive semi-definite, to rounding: the filter refuses anything else.
+        const Eigen::Matrix3d c = e.covariance();
+        const Eigen::Vector3d ev =
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c, Eigen::EigenvaluesOnly).eigenvalues();
+        if (ev.minCoeff() < -1e-12 * std::max(1.0, ev.cwiseAbs().maxCoeff()))
+          fail(name, n, "odom_delta: the covariance is not positive semi-definite");
+      }
+      check_time(t_odom, e.t, name, n, "odom_delta");
+      log.increments.push_back(e);
+    } else if (kind == "gps") {
+      p.count(f, 4, 4, "t,x,y");
+      GpsEvent e{p.number(f[1], "t"), p.number(f[2], "x"), p.number(f[3], "y")};
+      check_time(t_gps, e.t, name, n, "gps");
+      log.gps.push_back(e);
     } else if (kind == "meas") {
-      p.count(f, 4, 7, "t,range,bearing[,label[,sigma_range,sigma_bearing]]");
+      p.count(f, 4, 8, "t,range,bearing[,label[,sigma_range,sigma_bearing[,rho]]]");
       if (f.size() == 6) fail(name, n, "'meas' gives both sigma_range and sigma_bearing, or neither");
       MeasEvent e{p.number(f[1], "t"), p.number(f[2], "range"), p.number(f[3], "bearing"), "", -1, -1};
       if (!(e.range > 0)) fail(name, n, "range: must be positive, not " + f[2]);
       if (std::abs(e.bearing) > 3.2) fail(name, n, "bearing: must be in [-pi, pi] rad, not " + f[3]);
       if (f.size() >= 5) e.label = f[4];
-      if (f.size() == 7) {
+      if (f.size() >= 7) {
         e.sigma_range = p.sigma(f[5], "sigma_range", false);  // R must be positive definite
         e.sigma_bearing = p.sigma(f[6], "sigma_bearing", false);
+      }
+      if (f.size() == 8) {
+        e.rho = p.number(f[7], "rho");
+        if (!(std::abs(e.rho) < 1))
+          fail(name, n, "rho: a correlation in (-1, 1) expected (R positive definite), not " + f[7]);
       }
       if (e.label.empty()) {
         if (unlabelled++ == 0) first_unlabelled = n;
@@ -187,7 +240,8 @@ EventLog read_event_log(std::istream& in, const std::string& name) {
       p.count(f, 2, 2, "version");
       if (f[1] != "1") fail(name, n, "format version " + f[1] + " not supported (1 expected)");
     } else {
-      fail(name, n, "unknown line kind '" + kind + "' (odom, meas, scan, truth, landmark, meta expected)");
+      fail(name, n,
+           "unknown line kind '" + kind + "' (odom, odom_delta, meas, scan, truth, gps, landmark, meta expected)");
     }
   }
   if (in.bad()) throw std::runtime_error(name + ": read error");
@@ -217,20 +271,30 @@ void write_event_log(const EventLog& log, std::ostream& out, const std::string& 
     out << "landmark," << l.label << ',' << fmt(l.x) << ',' << fmt(l.y) << '\n';
   for (const mrclam::PoseSample& s : log.truth)
     out << "truth," << fmt(s.t) << ',' << fmt(s.x) << ',' << fmt(s.y) << ',' << fmt(s.theta) << '\n';
-  // odom, meas and scan lines merged in time order (meas before odom at equal times: a scan ends
-  // the interval that the odom line at its time starts).
-  std::size_t i = 0, j = 0, k = 0;
+  for (const GpsEvent& g : log.gps) out << "gps," << fmt(g.t) << ',' << fmt(g.x) << ',' << fmt(g.y) << '\n';
+  // odom (or odom_delta), meas and scan lines merged in time order (meas before odom at equal
+  // times: a scan ends the interval that the odom line at its time starts; odom_delta before meas:
+  // an increment ends at its time).
+  std::size_t i = 0, j = 0, k = 0, d = 0;
   const auto& o = log.odometry;
   const auto& m = log.measurements;
   const auto& e = log.empty_scans;
-  while (i < o.size() || j < m.size() || k < e.size()) {
+  const auto& inc = log.increments;
+  while (i < o.size() || j < m.size() || k < e.size() || d < inc.size()) {
     const double to = i < o.size() ? o[i].t : INFINITY, tm = j < m.size() ? m[j].t : INFINITY,
-                 te = k < e.size() ? e[k] : INFINITY;
-    if (tm <= to && tm <= te && j < m.size()) {
+                 te = k < e.size() ? e[k] : INFINITY, td = d < inc.size() ? inc[d].t : INFINITY;
+    if (d < inc.size() && td <= tm && td <= te) {
+      const OdomDeltaEvent& u = inc[d++];
+      out << "odom_delta," << fmt(u.t) << ',' << fmt(u.dx) << ',' << fmt(u.dy) << ',' << fmt(u.dtheta);
+      if (u.has_cov)
+        for (const double c : u.cov) out << ',' << fmt(c);
+      out << '\n';
+    } else if (tm <= to && tm <= te && j < m.size()) {
       const MeasEvent& z = m[j++];
       out << "meas," << fmt(z.t) << ',' << fmt(z.range) << ',' << fmt(z.bearing);
       if (!z.label.empty() || z.sigma_range > 0) out << ',' << z.label;
       if (z.sigma_range > 0) out << ',' << fmt(z.sigma_range) << ',' << fmt(z.sigma_bearing);
+      if (z.sigma_range > 0 && z.rho != 0) out << ',' << fmt(z.rho);
       out << '\n';
     } else if (te <= to && k < e.size()) {
       out << "scan," << fmt(e[k++]) << '\n';
@@ -294,17 +358,23 @@ LogNoise estimate_noise(const EventLog& log, double inflation) {
 
 LogSource::LogSource(const EventLog& log, const LogNoise& noise) {
   const auto& o = log.odometry;
-  if (o.empty()) throw std::runtime_error("the log has no odom line");
+  const auto& inc = log.increments;
+  if (o.empty() && inc.empty()) throw std::runtime_error("the log has no odom or odom_delta line");
   auto meta = [&](const char* k, double dflt) {
     const auto it = log.meta.find(k);
     return it == log.meta.end() ? dflt : it->second;
   };
-  sensor = SensorModel{meta("min_range_m", 0.0), meta("max_range_m", 30.0), meta("fov_rad", 2 * kPi<double>),
-                       meta("sigma_bearing_rad", noise.sigma_bearing_rad > 0 ? noise.sigma_bearing_rad : 0.0175)};
+  sensor = SensorModel{meta("min_range_m", 0.0),
+                       meta("max_range_m", 30.0),
+                       meta("fov_rad", 2 * kPi<double>),
+                       meta("sigma_bearing_rad", noise.sigma_bearing_rad > 0 ? noise.sigma_bearing_rad : 0.0175),
+                       meta("sensor_x_m", 0.0),
+                       meta("sensor_y_m", 0.0),
+                       meta("sensor_theta_rad", 0.0)};
   const std::vector<std::string> labels = log.landmark_labels();
   true_landmarks = labels.size();
   const double tol = meta("scan_tolerance_s", 0.0);
-  const double t0 = o.front().t;
+  const double t0 = o.empty() ? inc.front().t : o.front().t;
   mrclam::PoseSample p0{t0, 0, 0, 0};
   if (log.meta.count("start_x_m") || log.meta.count("start_y_m") || log.meta.count("start_theta_rad")) {
     p0 = {t0, meta("start_x_m", 0), meta("start_y_m", 0), meta("start_theta_rad", 0)};
@@ -372,20 +442,51 @@ LogSource::LogSource(const EventLog& log, const LogNoise& noise) {
       Eigen::Vector2d(noise.sigma_range_m * noise.sigma_range_m, noise.sigma_bearing_rad * noise.sigma_bearing_rad)
           .asDiagonal();
   const std::map<std::string, int> index = log.label_indices();
+  // Pose increments: each applied whole, in time order, before the scans at or after its time.
+  std::size_t d = 0;
+  double t_inc = t0;
+  auto increment = [&]() {
+    const OdomDeltaEvent& u = inc[d++];
+    RunInput in;
+    in.increment = true;
+    in.dx_m = u.dx;
+    in.dy_m = u.dy;
+    in.dtheta_rad = u.dtheta;
+    in.t_s = u.t;
+    in.dt_s = u.t - t_inc;
+    if (u.has_cov) {
+      in.increment_cov = u.covariance();
+    } else if (in.dt_s == 0) {  // the first line: the start, no time for noise to act
+      in.increment_cov.setZero();
+    } else if (noise.sigma_v_mps > 0 && noise.sigma_w_radps > 0) {
+      in.increment_cov = Eigen::Vector3d(noise.sigma_v_mps * noise.sigma_v_mps * in.dt_s, 0,
+                                         noise.sigma_w_radps * noise.sigma_w_radps * in.dt_s)
+                             .asDiagonal();
+    } else {
+      throw std::runtime_error("odom_delta line at t = " + fmt(u.t) +
+                               " has no covariance and none is given (--sigma-v, --sigma-w)");
+    }
+    t_inc = u.t;
+    inputs_.push_back(std::move(in));
+  };
   for (const ScanAt& scan : scans) {
     if (scan.t < t) continue;  // before the first odom line
-    while (i + 1 < o.size() && o[i + 1].t <= scan.t) {
-      advance(o[i + 1].t);
-      ++i;
+    if (inc.empty()) {
+      while (i + 1 < o.size() && o[i + 1].t <= scan.t) {
+        advance(o[i + 1].t);
+        ++i;
+      }
+      advance(scan.t);
+    } else {
+      while (d < inc.size() && inc[d].t <= scan.t) increment();
     }
-    advance(scan.t);
     RunInput in;
     in.scan = true;
     for (const MeasEvent* z : scan.z) {
       const auto it = index.find(z->label);
       SimObservation so{Eigen::Vector2d(z->range, z->bearing), it == index.end() ? -1 : it->second, R_const};
       if (z->sigma_range > 0) {
-        so.R = Eigen::Vector2d(z->sigma_range * z->sigma_range, z->sigma_bearing * z->sigma_bearing).asDiagonal();
+        so.R = z->R();
       } else if (!(noise.sigma_range_m > 0 && noise.sigma_bearing_rad > 0)) {
         throw std::runtime_error("meas line at t = " + fmt(z->t) +
                                  " has no sigma_range, sigma_bearing and none is given (--sigma-range, "
@@ -399,6 +500,7 @@ LogSource::LogSource(const EventLog& log, const LogNoise& noise) {
     in.t_s = scan.t;
     inputs_.push_back(std::move(in));
   }
+  while (d < inc.size()) increment();  // the motion after the last scan (the trace's end)
 }
 
 EventLog mrclam_to_log(const mrclam::Dataset& ds, const mrclam::RobotLog& robot, const MrclamModel& model,

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cctype>
 #include <limits>
 #include <memory>
@@ -200,7 +201,14 @@ std::vector<Method> select_methods(const std::vector<std::string>& names, bool a
 
 StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sensor) {
   StepSettings<double> ss = opt.step;
-  ss.local_radius_m = sensor.max_range_m + opt.compensation_m;
+  if (ss.sensor_x_m == 0 && ss.sensor_y_m == 0 && ss.sensor_theta_rad == 0) {  // the options give no mount
+    ss.sensor_x_m = sensor.x_m;
+    ss.sensor_y_m = sensor.y_m;
+    ss.sensor_theta_rad = sensor.theta_rad;
+  }
+  // r + d around the robot's reference point: the sensor's reach from there is its range plus its
+  // offset.
+  ss.local_radius_m = sensor.max_range_m + std::hypot(ss.sensor_x_m, ss.sensor_y_m) + opt.compensation_m;
   ss.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.max_range_m = sensor.max_range_m - opt.view_margin_m;
   ss.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
@@ -239,6 +247,10 @@ Pose2<double> SlamSession::pose() const { return st_->step.slam().pose(); }
 
 void SlamSession::predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps) {
   check(st_->step.predict(ekf::Odometry<double>{v_mps, w_radps, dt_s, sigma_v_mps, sigma_w_radps}), "predict");
+}
+
+void SlamSession::predict(double dx_m, double dy_m, double dtheta_rad, const Eigen::Matrix3d& cov) {
+  check(st_->step.predict(ekf::PoseIncrement<double>{dx_m, dy_m, dtheta_rad, cov}), "predict (increment)");
 }
 
 void SlamSession::relocalise(const Eigen::Matrix3d& P) {
@@ -318,6 +330,11 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
     sc.added(s.result.feature[i], scan[i].truth);
   }
   res.merges += s.result.review.merged;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (s.out.feature[i] < 0) continue;
+    ++res.nis_pairings;
+    res.nis_sum += s.out.d2[i];
+  }
   if (s.result.review.removed > 0 || s.result.review.merged > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
     std::vector<bool> alive(sc.ids(), false);
@@ -474,17 +491,25 @@ bool RecordedSource::next(RunInput& in) {
 
 RunResult run_inputs(RunSource& src, const RunOptions& opt) {
   SlamSession session(opt, src.sensor, src.true_landmarks, src.x0, src.P0);
+  std::vector<TracePoint> trace;
   RunInput in;
   while (src.next(in)) {
+    double t = in.t_s;
     if (in.relocalise) {
       session.relocalise(in.pose_cov);
     } else if (in.scan) {
       session.scan(in.observations, in.t_s, in.have_truth ? &in.true_pose : nullptr);
+    } else if (in.increment) {
+      session.predict(in.dx_m, in.dy_m, in.dtheta_rad, in.increment_cov);
     } else {
       session.predict(in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps);
+      t += in.dt_s;
     }
+    if (opt.record_trace) trace.push_back({t, session.pose()});
   }
-  return session.finish();
+  RunResult r = session.finish();
+  r.trace = std::move(trace);
+  return r;
 }
 
 RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt) {

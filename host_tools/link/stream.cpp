@@ -97,6 +97,9 @@ proto::Reset link_reset(const Scenario& sc) {
 }
 
 proto::Odometry link_odometry(const RunInput& in) {
+  if (in.increment) {  // refused, not converted: (v, w) would drop the lateral part and the covariance
+    throw std::runtime_error("a pose increment (odom_delta) cannot be sent: ODOMETRY carries (v, w) only");
+  }
   proto::Odometry o;
   o.v_mps = static_cast<float>(in.v_mps);
   o.w_radps = static_cast<float>(in.w_radps);

@@ -251,9 +251,21 @@ TEST_CASE("replay: every malformed line is an error naming the file, the line an
       {"meas,0,-1,0\n", "log.csv:1: range: must be positive, not -1"},
       {"meas,0,1,7\n", "log.csv:1: bearing: must be in [-pi, pi] rad, not 7"},
       {"meas,0,1,0,A,0.1\n", "log.csv:1: 'meas' gives both sigma_range and sigma_bearing, or neither"},
-      {"meas,0,1,0,A,0.1,0.1,9\n",
-       "log.csv:1: 'meas' takes t,range,bearing[,label[,sigma_range,sigma_bearing]] (7 "
+      {"meas,0,1,0,A,0.1,0.1,0,9\n",
+       "log.csv:1: 'meas' takes t,range,bearing[,label[,sigma_range,sigma_bearing[,rho]]] (8 "
        "fields given)"},
+      {"meas,0,1,0,A,0.1,0.1,1\n", "log.csv:1: rho: a correlation in (-1, 1) expected (R positive definite), not 1"},
+      {"odom_delta,0,1,0\n", "log.csv:1: 'odom_delta' takes t,dx,dy,dtheta[,cxx,cxy,cxt,cyy,cyt,ctt] (3 fields given)"},
+      {"odom_delta,0,1,0,0,1,0,0\n", "log.csv:1: 'odom_delta' gives all 6 covariance terms, or none"},
+      {"odom_delta,0,1,0,0,1,2,0,1,0,1\n", "log.csv:1: odom_delta: the covariance is not positive semi-definite"},
+      {"odom_delta,0,1,0,4\n", "log.csv:1: dtheta: must be in [-pi, pi] rad, not 4"},
+      {"odom_delta,1,1,0,0\nodom_delta,0.5,1,0,0\n", "log.csv:2: time goes back in the odom_delta lines"},
+      {"odom,0,1,0\nodom_delta,1,1,0,0\n",
+       "log.csv:2: odom_delta line in a log of odom lines (line 1): one or the other"},
+      {"odom_delta,0,1,0,0\nodom,1,1,0\n",
+       "log.csv:2: odom line in a log of odom_delta lines (line 1): one or the other"},
+      {"gps,0,1\n", "log.csv:1: 'gps' takes t,x,y (2 fields given)"},
+      {"gps,1,1,2\ngps,0,1,2\n", "log.csv:2: time goes back in the gps lines"},
       {"meas,0,1,0,A\nmeas,1,1,0\n",
        "log.csv:2: a measurement without a label, while line 1 has one: label every measurement (clutter: "
        "'clutter') or none"},
@@ -264,8 +276,9 @@ TEST_CASE("replay: every malformed line is an error naming the file, the line an
       {"meta,max_range,9\n", "log.csv:1: unknown meta key 'max_range'"},
       {"geojcbb_log,2\n", "log.csv:1: format version 2 not supported (1 expected)"},
       {"odometry,0,1,0\n",
-       "log.csv:1: unknown line kind 'odometry' (odom, meas, scan, truth, landmark, meta expected)"},
-      {"odom;0;1;0\n", "log.csv:1: unknown line kind 'odom;0;1;0' (odom, meas, scan, truth, landmark, meta expected)"},
+       "log.csv:1: unknown line kind 'odometry' (odom, odom_delta, meas, scan, truth, gps, landmark, meta expected)"},
+      {"odom;0;1;0\n",
+       "log.csv:1: unknown line kind 'odom;0;1;0' (odom, odom_delta, meas, scan, truth, gps, landmark, meta expected)"},
   };
   for (const Case& c : cases) {
     CAPTURE(c.text);

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "geojcbb_host/mrclam.hpp"
+#include "geojcbb_host/victoria_park.hpp"
 
 namespace geojcbb::test {
 
@@ -37,5 +38,10 @@ inline bool have_data(const std::string& dir, const char* name, const char* env)
 
 /// The UTIAS MRCLAM data (datasets 6 and 7).
 inline bool have_mrclam() { return have_data(host::mrclam::default_data_dir(), "MRCLAM", "GEOJCBB_MRCLAM_DIR"); }
+
+/// ACFR's Victoria Park (odometry, laser frames, tree detections, GPS).
+inline bool have_victoria_park() {
+  return have_data(host::victoria_park::default_data_dir(), "Victoria Park", "GEOJCBB_VICTORIA_PARK_DIR");
+}
 
 }  // namespace geojcbb::test

@@ -191,6 +191,9 @@ class SlamStep {
 
   /// @return the statuses of ekf::Slam::predict.
   [[nodiscard]] Status predict(const ekf::Odometry<T>& u) { return slam_.predict(u); }
+  /// A pose increment with its covariance (wheel odometry, a vehicle model).
+  /// @return the statuses of ekf::Slam::predict.
+  [[nodiscard]] Status predict(const ekf::PoseIncrement<T>& u) { return slam_.predict(u); }
 
   /// One scan. `clock` may be nullptr.
   /// @return kOk; kInvalidInput when not configured; the statuses of predict_local, associate and

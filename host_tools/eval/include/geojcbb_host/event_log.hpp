@@ -4,14 +4,17 @@
 //   meta,KEY,VALUE                                    sensor, start pose, scan grouping
 //   landmark,LABEL,x,y                                known landmark positions [m]
 //   odom,t,v,w[,sigma_v,sigma_w]                      command [m/s, rad/s] from t to the next odom
-//   meas,t,range,bearing[,label[,sigma_range,sigma_bearing]]   [s, m, rad]
+//   odom_delta,t,dx,dy,dtheta[,cxx,cxy,cxt,cyy,cyt,ctt]  pose increment up to t, its covariance
+//   meas,t,range,bearing[,label[,sigma_range,sigma_bearing[,rho]]]   [s, m, rad]; rho: full R
 //   scan,t                                            a frame that saw nothing
 //   truth,t,x,y,theta                                 ground-truth pose [s, m, m, rad]
+//   gps,t,x,y                                         a position fix of the antenna [s, m, m]
 // Comment lines ('#') and blank lines are skipped anywhere. A malformed line throws
 // std::runtime_error "path:line: reason"; nothing is ever read past it.
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -30,10 +33,25 @@ struct OdomEvent {
   double t, v, w;
   double sigma_v = -1, sigma_w = -1;  ///< std of v and w over the interval to the next odom line (< 0: not given)
 };
+/// The robot's motion from the previous odom_delta line's time (the first: from the start pose) to
+/// t, in its frame at the start of the motion: forward, left, counter-clockwise.
+struct OdomDeltaEvent {
+  double t, dx, dy, dtheta;
+  /// Upper triangle of the covariance of (dx, dy, dtheta): xx, xy, xtheta, yy, ytheta, thetatheta.
+  std::array<double, 6> cov{};
+  bool has_cov = false;  ///< false: the replay's --sigma-v/--sigma-w give it (LogSource)
+  Eigen::Matrix3d covariance() const;
+};
 struct MeasEvent {
   double t, range, bearing;
   std::string label;                            ///< empty: unlabelled
   double sigma_range = -1, sigma_bearing = -1;  ///< [m], [rad] (< 0: not given)
+  double rho = 0;             ///< correlation of the range and bearing errors: R's off-diagonal is rho sigma_r sigma_b
+  Eigen::Matrix2d R() const;  ///< from the sigmas and rho (sigmas given)
+};
+/// A position fix of the GPS antenna (at meta gps_x_m, gps_y_m in the robot's frame).
+struct GpsEvent {
+  double t, x, y;
 };
 struct LandmarkEvent {
   std::string label;
@@ -44,8 +62,10 @@ struct LandmarkEvent {
 struct EventLog {
   std::map<std::string, double> meta;  ///< see kMetaKeys
   std::vector<LandmarkEvent> landmarks;
-  std::vector<OdomEvent> odometry;
+  std::vector<OdomEvent> odometry;  ///< a log has odom lines or odom_delta lines, not both
+  std::vector<OdomDeltaEvent> increments;
   std::vector<MeasEvent> measurements;
+  std::vector<GpsEvent> gps;
   std::vector<double> empty_scans;  ///< times of `scan` lines
   std::vector<mrclam::PoseSample> truth;
   /// Landmark index of a label: the landmark lines' order, else labels in order of first
@@ -83,8 +103,12 @@ LogNoise estimate_noise(const EventLog& log, double inflation);
 /// filter predicts to the scan's time. A line's own sigmas are used as given for its whole interval
 /// (a part of length dt of an interval T, split by a scan, gets sigma * sqrt(T / dt)); otherwise
 /// `noise`. Measurements within scan_tolerance_s (meta, default 0) of a scan's first one join it.
-/// Events before the first odom line are skipped. Throws std::runtime_error when the log has no
-/// odom line, or a measurement has no noise from its line or `noise`.
+/// Events before the first odom line are skipped. Pose increments are not split: a scan is taken
+/// at the pose of the last odom_delta line at or before it (a converter ends an increment at each
+/// scan's time); an increment without its covariance gets diag(sigma_v^2 dt, 0, sigma_w^2 dt) from
+/// `noise` (dt since the previous odom_delta line). The sensor's mount comes from meta sensor_x_m,
+/// sensor_y_m, sensor_theta_rad. Throws std::runtime_error when the log has no odom or odom_delta
+/// line, or a measurement or increment has no noise from its line or `noise`.
 class LogSource : public RecordedSource {
  public:
   LogSource(const EventLog& log, const LogNoise& noise);

@@ -53,6 +53,8 @@ struct RunOptions {
   /// Pair by ground truth instead of running the strategy (gated at chi2(0.999, 2)): the filter's
   /// own accuracy with perfect association, a reference for the strategies.
   bool oracle = false;
+  /// Record RunResult::trace, the pose estimate after every input.
+  bool record_trace = false;
 };
 
 struct SensorModel;
@@ -121,6 +123,12 @@ constexpr const char* kPresetsHelp =
     "first) or a combination (+VRLTHC); PCJCBB+RL is the robust preset";
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle = false);
 
+/// The pose estimate at a time.
+struct TracePoint {
+  double t_s;
+  Pose2<double> pose;
+};
+
 struct StepRecord {
   double t_s;
   Pose2<double> truth, estimate;
@@ -171,12 +179,21 @@ struct RunResult {
   double mean_abs_x_m = 0,
          mean_abs_y_m = 0;        ///< over the scans with a true pose
   std::vector<StepRecord> steps;  ///< one per scan with a true pose
+  /// Every scan's pairings and the sum of their NIS (d2, 2 dof each), with or without a true pose.
+  long nis_pairings = 0;
+  double nis_sum = 0;
+  /// The pose estimate after every input (RunOptions::record_trace): what a real log without a
+  /// true pose is scored by (GPS, trace.hpp).
+  std::vector<TracePoint> trace;
 };
 
 /// The sensor as the filter knows it, for the local region and for which
 /// landmarks are expected.
 struct SensorModel {
   double min_range_m = 0, max_range_m = 30, fov_rad = 3.14159265358979, sigma_bearing_rad = 0.0175;
+  /// Where the sensor sits on the robot (core/range_bearing.hpp's Mount): used where the run's
+  /// options give no mount of their own.
+  double x_m = 0, y_m = 0, theta_rad = 0;
 };
 
 /// The evaluation's scoring of one run, in one place: the in-process SlamSession and a device's
@@ -241,6 +258,11 @@ KidnapScore kidnap_score(const RunResult& r, double kidnap_t_s, int window = 10)
 struct RunInput {
   bool scan = false;
   double v_mps = 0, w_radps = 0, dt_s = 0, sigma_v_mps = 0, sigma_w_radps = 0;  ///< prediction
+  /// The prediction is a pose increment (dx, dy, dtheta in the robot's frame at its start, with
+  /// its covariance increment_cov) instead of (v, w) over dt_s.
+  bool increment = false;
+  double dx_m = 0, dy_m = 0, dtheta_rad = 0;
+  Eigen::Matrix3d increment_cov = Eigen::Matrix3d::Zero();
   std::vector<SimObservation> observations;  ///< scan: (range, bearing), each with its truth and R
   double t_s = 0;                            ///< scan time (a prediction's start where known)
   bool have_truth = false;                   ///< true_pose is known
@@ -325,6 +347,8 @@ class SlamSession {
   SlamSession& operator=(const SlamSession&) = delete;
 
   void predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps);
+  /// A pose increment (dx, dy, dtheta) in the robot's frame, with its covariance.
+  void predict(double dx_m, double dy_m, double dtheta_rad, const Eigen::Matrix3d& cov);
   /// The robot was carried: its pose covariance re-set to P (the estimate kept), the map kept.
   void relocalise(const Eigen::Matrix3d& P);
   /// One scan; each observation's truth is a landmark index < true_landmarks,
