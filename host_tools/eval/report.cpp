@@ -41,7 +41,8 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   regrouped += r.regrouped;
   merges += r.merges;
   not_augmented += r.not_augmented;
-  full_runs += r.not_augmented > 0;
+  evicted += r.evicted;
+  full_runs += r.not_augmented > 0 || r.evicted > 0;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
   removed_true += r.removed_true_landmarks;
@@ -112,6 +113,7 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.window_held_scans = window_held_scans;
   row.merges = merges;
   row.not_augmented = not_augmented;
+  row.evicted = evicted;
   row.full_runs = full_runs;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;

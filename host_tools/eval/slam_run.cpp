@@ -330,12 +330,13 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
     sc.added(s.result.feature[i], scan[i].truth);
   }
   res.merges += s.result.review.merged;
+  res.evicted += s.result.review.evicted;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     if (s.out.feature[i] < 0) continue;
     ++res.nis_pairings;
     res.nis_sum += s.out.d2[i];
   }
-  if (s.result.review.removed > 0 || s.result.review.merged > 0) {
+  if (s.result.review.removed > 0 || s.result.review.merged > 0 || s.result.review.evicted > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
     std::vector<bool> alive(sc.ids(), false);
     for (int j = 0; j < slam.landmarks(); ++j) alive[static_cast<std::size_t>(slam.id(j))] = true;

@@ -100,6 +100,7 @@ class Options(TypedDict, total=False):
     hypothesis_margin_nats: float  # default 3
     hypothesis_hold: bool  # default 0
     cluster_first: bool  # default 0
+    evict_when_full: bool  # default 0
     # END GENERATED: option keywords
 
 

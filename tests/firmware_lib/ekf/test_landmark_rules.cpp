@@ -282,3 +282,79 @@ TEST_CASE_TEMPLATE("the landmark rules and known landmarks allocate nothing", T,
   CHECK(r->slam.index_of(id) == 0);
   CHECK(guard.allocations() == 0);
 }
+
+TEST_CASE_TEMPLATE("a full map: new landmarks refused, or with evict_when_full the least-seen far one evicted, ids stable",
+                   T, float, double) {
+  // Four landmarks fit. At the origin L0 is seen on four scans and L1 (new at the third) on two;
+  // 30 m on, L2 and L3 fill the map, and L4 needs room. Off: L4 is refused and counted. On: L1 goes
+  // (beyond r + d = 10 m and the least seen), every other landmark keeps its id and estimate, and
+  // L4 gets the next id. Near the origin, with every landmark within r + d, nothing can go.
+  using SB = Bounds<8, 4, 3, 2000, 4>;
+  for (const bool evict : {false, true}) {
+    CAPTURE(evict);
+    auto step = std::make_unique<node::SlamStep<T, SB>>();
+    node::StepSettings<T> s;
+    s.strategy = Strategy::kJcbb;
+    s.local_radius_m = T(10);
+    s.min_range_m = T(0.3);
+    s.max_range_m = T(8);
+    s.half_fov_rad = T(1.5);
+    s.evict_when_full = evict;
+    REQUIRE(step->configure(s) == Status::kOk);
+    REQUIRE(step->reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+    const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
+    auto obs = std::make_unique<Observations<T, SB>>();
+    auto res = std::make_unique<node::StepResult<T, SB>>();
+    double x = 0;
+    auto scan = [&](std::initializer_list<Vec2<double>> ls) {
+      obs->clear();
+      for (const Vec2<double>& l : ls) REQUIRE(obs->push(observe(Pose2<double>{x, 0, 0}, l).cast<T>(), R) == Status::kOk);
+      REQUIRE(step->step(*obs, *res) == Status::kOk);
+    };
+    const Vec2<double> L0(3, 0.5), L1(4, -1), L2(33, 1), L3(34, -1), L4(35, 2), L5(2, 2);
+    scan({L0});
+    scan({L0});
+    scan({L0, L1});
+    scan({L0, L1});
+    const FeatureId id0 = step->slam().index_of(0) >= 0 ? 0 : -1, id1 = 1;
+    REQUIRE(id0 == 0);
+    REQUIRE(step->slam().hits(step->slam().index_of(id0)) > step->slam().hits(step->slam().index_of(id1)));
+    for (int k = 0; k < 30; ++k) {  // 30 m along x
+      REQUIRE(step->predict(ekf::Odometry<T>{T(1), T(0), T(1), T(0.001), T(0.0001)}) == Status::kOk);
+      x += 1;
+    }
+    scan({L2, L3});
+    REQUIRE(step->slam().landmarks() == 4);
+    const Vec2<T> l0_before = step->slam().landmark(step->slam().index_of(id0));
+    scan({L2, L3, L4});
+    CHECK(res->outcome[0] == node::Outcome::kPaired);
+    CHECK(res->outcome[1] == node::Outcome::kPaired);
+    CHECK(step->slam().landmarks() == 4);
+    if (!evict) {
+      CHECK(res->outcome[2] == node::Outcome::kNotAugmented);
+      CHECK(res->review.evicted == 0);
+      CHECK(step->slam().index_of(id1) >= 0);
+      continue;
+    }
+    REQUIRE(res->outcome[2] == node::Outcome::kNewLandmark);
+    CHECK(res->feature[2] == 4);  // the next id
+    CHECK(res->review.evicted == 1);
+    CHECK(step->slam().index_of(id1) == -1);  // L1: beyond r + d and the least seen
+    for (const FeatureId id : {0, 2, 3, 4}) CHECK(step->slam().index_of(id) >= 0);
+    CHECK(step->slam().landmark(step->slam().index_of(id0)) == l0_before);
+    // Every landmark within r + d (a map filled where the robot is): nothing can go, the new one
+    // is refused.
+    auto near = std::make_unique<node::SlamStep<T, SB>>();
+    REQUIRE(near->configure(s) == Status::kOk);
+    REQUIRE(near->reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+    obs->clear();
+    for (const Vec2<double>& l : {L0, L1, L5, Vec2<double>(5, 0), Vec2<double>(6, -2)})
+      REQUIRE(obs->push(observe(Pose2<double>{0, 0, 0}, l).cast<T>(), R) == Status::kOk);
+    REQUIRE(near->step(*obs, *res) == Status::kOk);
+    CHECK(near->slam().landmarks() == 4);
+    CHECK(res->review.evicted == 0);
+    int refused = 0;
+    for (int i = 0; i < res->count; ++i) refused += res->outcome[i] == node::Outcome::kNotAugmented;
+    CHECK(refused == 1);
+  }
+}

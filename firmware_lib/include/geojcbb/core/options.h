@@ -141,7 +141,9 @@
   X(BOOL, hypothesis_hold, 0, (ANY, 0, 0), "", "--hypothesis-hold", \
     "while a window is open, hold the observations its hypotheses pair differently (off: the association's stand)") \
   X(BOOL, cluster_first, 0, (ANY, 0, 0), "", "--cluster-first", \
-    "pair each cluster of observations (within dbscan_eps_m) as a unit first, its members at that posterior")
+    "pair each cluster of observations (within dbscan_eps_m) as a unit first, its members at that posterior") \
+  X(BOOL, evict_when_full, 0, (ANY, 0, 0), "", "--evict-when-full", \
+    "a full map makes room for a new landmark: the least-seen landmark beyond r + d goes (the farthest of equals)")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

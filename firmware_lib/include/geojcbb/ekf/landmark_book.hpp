@@ -52,6 +52,7 @@ struct ReviewStats {
   int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
   int removed_moved = 0;   ///< of those, removed by the static-gate rule
   int merged = 0;          ///< landmarks merged into another (node::SlamStep: a loop closure's duplicates)
+  int evicted = 0;         ///< landmarks evicted to make room in a full map (node::SlamStep: evict_when_full)
 };
 
 /// Why the current review removes a landmark whatever its counters say.

@@ -771,6 +771,30 @@ class Slam {
     return Status::kOk;
   }
 
+  /// Makes room in a full map: removes the landmark with the fewest hits among those farther than
+  /// radius_m from the robot (beyond the local region, so not in this scan's prediction), the
+  /// farthest of equals; every other landmark keeps its id.  O(n^2)
+  /// @param[out] evicted  its id (-1 when none)
+  /// @return kOk; kCapacityExceeded when no landmark is beyond radius_m (nothing changed).
+  [[nodiscard]] Status evict(T radius_m, FeatureId& evicted) {
+    evicted = -1;
+    int best = -1;
+    T best_d = T(0);
+    const Vec2<T> r(x_[0], x_[1]);
+    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
+      const T d = (landmark(j) - r).norm();
+      if (!(d > radius_m)) continue;
+      if (best < 0 || hits(j) < hits(best) || (hits(j) == hits(best) && d > best_d)) {
+        best = j;
+        best_d = d;
+      }
+    }
+    if (best < 0) return Status::kCapacityExceeded;
+    evicted = id(best);
+    remove(best);
+    return Status::kOk;
+  }
+
  private:
   /// Removes landmark j (x, P and its record; the others keep their ids and order). Out of line:
   /// its keep[] (2 bytes a landmark) stays out of the caller's frame.  O(n^2)

@@ -760,6 +760,7 @@ class SlamStep {
     const std::uint32_t t3 = clock ? clock() : 0;
     // From here on nothing can fail: the outputs are written.
     out.count = obs.count;
+    int evicted = 0;
     for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
       const FeatureId f = assoc.feature[i];
       out.d2[i] = assoc.d2[i];
@@ -774,7 +775,15 @@ class SlamStep {
         FeatureId id = -1;
         // update() accepted every pair; a new landmark's z and R were validated by the caller's
         // association (associate() validates them): only a full map can refuse.
-        if (slam_.augment(obs.z[i], obs.R[i], id) == Status::kOk) {
+        Status added = slam_.augment(obs.z[i], obs.R[i], id);
+        FeatureId gone = -1;
+        // A full map makes room (evict_when_full): a landmark beyond r + d, not in this scan's
+        // prediction, so the pairs above and the review below are untouched.
+        if (added != Status::kOk && cfg_.evict_when_full && slam_.evict(cfg_.local_radius_m, gone) == Status::kOk) {
+          ++evicted;
+          added = slam_.augment(obs.z[i], obs.R[i], id);
+        }
+        if (added == Status::kOk) {
           out.outcome[i] = Outcome::kNewLandmark;
           out.feature[i] = id;
         } else {
@@ -801,6 +810,7 @@ class SlamStep {
     const std::uint32_t t4 = clock ? clock() : 0;
     out.diag = assoc.diag;
     out.review = rs;
+    out.review.evicted = evicted;
     out.counts = StageCounts{0, 0, t3 - t2, t4 - t3, t4 - t2};
     return Status::kOk;
   }

@@ -45,6 +45,7 @@ struct ReportRow {
   int regrouped = 0;                                           ///< observations cluster_first paired anew
   int merges = 0;                                              ///< duplicates merged after closures (loop_merge_d2)
   int not_augmented = 0, full_runs = 0;  ///< observations not added (the map full), and runs whose map filled
+  int evicted = 0;                       ///< landmarks evicted to make room (evict_when_full)
   double reloc_error_m = NAN;            ///< mean position error after the kidnap [m]
   double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
@@ -174,8 +175,8 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   for (const ReportRow& r : rows) {
     if (r.failed > 0) std::fprintf(f, "  %s: %d runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());
     if (r.full_runs > 0)
-      std::fprintf(f, "  %s: the map filled in %d runs; %d observations were not added as landmarks\n", r.name.c_str(),
-                   r.full_runs, r.not_augmented);
+      std::fprintf(f, "  %s: the map filled in %d runs; %d observations were not added as landmarks, %d landmarks evicted\n",
+                   r.name.c_str(), r.full_runs, r.not_augmented, r.evicted);
   }
 }
 
@@ -225,6 +226,7 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"landmarks_merged", r.merges},
                  {"runs_map_full", r.full_runs},
                  {"not_augmented", r.not_augmented},
+                 {"landmarks_evicted", r.evicted},
                  {"false_pairs_to_duplicate", r.fp_to_duplicate},
                  {"false_pairs_to_original", r.fp_to_original},
                  {"false_pairs_in_group", r.fp_in_group},

@@ -34,6 +34,7 @@ struct RunAggregate {
   int regrouped = 0;                                           ///< observations cluster_first paired anew
   int merges = 0;                                              ///< RunResult's, summed
   int not_augmented = 0, full_runs = 0;                        ///< RunResult's, summed; runs whose map filled
+  int evicted = 0;                                             ///< RunResult's, summed
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
   RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;

@@ -166,6 +166,7 @@ struct RunResult {
   std::vector<MapLandmark> map;        ///< the final map
   int dropped_observations = 0;        ///< over the observation capacity in a scan
   int not_augmented = 0;               ///< would have become landmarks, but the map was full (not added)
+  int evicted = 0;                     ///< landmarks evicted to make room (evict_when_full)
   int budget_hits = 0;                 ///< scans whose JCBB node budget ran out
   int relocalisations = 0;             ///< poses the relocaliser accepted
   int loop_commits = 0;                ///< loop closures the closure check committed (loop_check)

@@ -228,6 +228,7 @@ struct Config : Codec<Config> {
   float hypothesis_margin_nats = 3.0f;        ///< > 0
   bool hypothesis_hold = false;               ///< disputed observations held while a window is open
   bool cluster_first = false;                 ///< each cluster of observations paired as a unit first
+  bool evict_when_full = false;               ///< a full map evicts its least-seen landmark beyond r + d
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -313,6 +314,8 @@ struct Config : Codec<Config> {
               "disputed observations held while a window is open"),
         field("cluster_first", &Config::cluster_first, range::one_of(0, 1), "",
               "each cluster of observations paired as a unit first, its members at that posterior"),
+        field("evict_when_full", &Config::evict_when_full, range::one_of(0, 1), "",
+              "a full map makes room: its least-seen landmark beyond r + d goes"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -731,7 +734,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 151 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 152 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
