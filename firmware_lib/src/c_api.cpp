@@ -210,9 +210,8 @@ geojcbb_status geojcbb_slam_configure(geojcbb_slam* handle, const geojcbb_settin
   Slam* s = slam_of(handle);
   if (s == nullptr || settings == nullptr || !strategy_ok(static_cast<int>(settings->strategy)))
     return GEOJCBB_INVALID_INPUT;
-  node::StepSettings<float>& st = s->settings;
-  st = c_boundary::from_c(*settings);
-  return c_status(s->step.configure(st));
+  c_boundary::from_c(*settings, s->settings);
+  return c_status(s->step.configure(s->settings));
 }
 
 geojcbb_status geojcbb_slam_reset(geojcbb_slam* handle, const float x0[3], const float P0[9]) {

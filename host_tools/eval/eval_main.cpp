@@ -275,7 +275,8 @@ struct ReplayOptions {
   bool progress = true;
   int jobs = 0;
   RunOptions run;
-  GpsOptions gps;  ///< the screening (the antenna from the log's meta)
+  GpsOptions gps;      ///< the screening (the antenna from the log's meta)
+  RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
 };
 
 // The GPS table of a replay whose log has gps lines: per strategy the error of the estimated antenna
@@ -378,6 +379,15 @@ int run_replay(const ReplayOptions& o) {
     base.known_map = positions;
   }
   const std::vector<Method> strategies = select_methods(o.strategies, true, o.oracle);
+  if (o.runner && !log.increments.empty()) {  // before any strategy runs, not once per strategy
+    throw std::runtime_error(
+        "a log of pose increments (odom_delta) cannot be streamed to a device: ODOMETRY carries "
+        "(v, w) only; replay it in process");
+  }
+  if (o.runner && !log.gps.empty()) {
+    std::printf("GPS scoring needs the pose after every input, which a device does not report: not scored\n");
+  }
+  base.record_trace = base.record_trace && !o.runner;
   fs::create_directories(o.out_dir);
   int scans = 0, predictions = 0, with_truth = 0;
   for (const RunInput& in : source.inputs()) {
@@ -406,14 +416,14 @@ int run_replay(const ReplayOptions& o) {
   if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
 
   std::vector<RunAggregate> agg(strategies.size());
-  const double wall_s = run_parallel(strategies.size(), o.jobs, o.progress, [&](std::size_t k) {
+  const double wall_s = run_parallel(strategies.size(), o.runner ? 1 : o.jobs, o.progress, [&](std::size_t k) {
     RunOptions ro = base;
     strategies[k].apply(ro);
     replay::LogSource src = source;  // each thread its own position
     src.rewind();
     const auto a = std::chrono::steady_clock::now();
     try {
-      RunResult r = run_inputs(src, ro);
+      RunResult r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
       agg[k].add(r, std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
       agg[k].first = std::move(r);
       agg[k].have_first = true;
@@ -424,7 +434,7 @@ int run_replay(const ReplayOptions& o) {
   std::vector<ReportRow> rows, group_rows;
   int failures = 0;
   for (std::size_t k = 0; k < strategies.size(); ++k) {
-    ReportRow row = agg[k].row(strategies[k].name(), false, labelled);
+    ReportRow row = agg[k].row(strategies[k].name(), false, labelled && !o.runner);
     if (with_truth == 0) row.abs_x = row.abs_y = row.anees = NAN;
     rows.push_back(row);
     group_rows.push_back(agg[k].group_row(strategies[k].name()));
@@ -433,7 +443,7 @@ int run_replay(const ReplayOptions& o) {
   print_tables(rows, stdout, labelled);
   std::vector<GpsScore> gps(strategies.size());
   nlohmann::json gps_rows;
-  if (!log.gps.empty()) {
+  if (!log.gps.empty() && !o.runner) {
     for (std::size_t k = 0; k < strategies.size(); ++k)
       if (agg[k].have_first) gps[k] = score_gps(agg[k].first.trace, log.gps, gps_opt);
     gps_rows = gps_table(strategies, agg, gps);
@@ -478,7 +488,7 @@ int run_replay(const ReplayOptions& o) {
     js["wall_s"] = wall_s;
     js["strategies"] = rows_json(rows);
     if (o.group_radius_m > 0) js["group_level"] = rows_json(group_rows);
-    if (!log.gps.empty()) {
+    if (!log.gps.empty() && !o.runner) {
       js["gps"] = {{"fixes", gps[0].fixes},
                    {"rejected_after_gap", gps[0].after_gap},
                    {"rejected_jumps", gps[0].jumps},
@@ -496,7 +506,7 @@ int run_replay(const ReplayOptions& o) {
     path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
     for (std::size_t k = 0; k < strategies.size(); ++k) {
       if (!agg[k].have_first) continue;
-      if (log.gps.empty()) {
+      if (log.gps.empty() || o.runner) {
         path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
       } else {
         char t[96];
@@ -806,6 +816,11 @@ int run(int argc, char** argv) {
   rp->add_flag("!--no-svg", ro.svg, "do not write the figure");
   rp->add_flag("!--no-progress", ro.progress, "no progress bar on stderr");
   add_run_options(*rp, ro.run);
+  LinkCli rp_link;
+  add_link_options(*rp, rp_link,
+                   "stream every replay to the device on this serial port or pty instead of running it in process "
+                   "(settings the device cannot run are refused)",
+                   "start this device program with --pty (e.g. geojcbb_device) and stream every replay to it");
 
   ConvertOptions co;
   auto* cv = app.add_subcommand("convert-mrclam",
@@ -887,7 +902,10 @@ int run(int argc, char** argv) {
         if (rp->count("--occlusion") == 0) ro.run.step.occlusion_rad = m.step.occlusion_rad;
       }
       ro.progress = ro.progress && isatty(STDERR_FILENO);
-      return run_replay(ro);
+      return with_device(rp_link, ro.oracle, ro.known_map, [&](const RunInputsFn& runner, const std::string&) {
+        ro.runner = runner;
+        return run_replay(ro);
+      });
     }
     if (cv->parsed()) return run_convert(co);
     if (sim->parsed()) {

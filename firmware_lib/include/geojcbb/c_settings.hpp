@@ -9,12 +9,17 @@
 
 namespace geojcbb::c_boundary {
 
-inline StepSettings<float> from_c(const geojcbb_settings& c) {
-  StepSettings<float> s;
+/// Written in place: no temporary (a caller with a tight stack frame, geojcbb_slam_configure).
+inline void from_c(const geojcbb_settings& c, StepSettings<float>& s) {
 #define GEOJCBB_FROM_C(TYPE, name, def, range, unit, cli, doc) \
   s.name = options::convert<typename options::Types<float>::TYPE>(c.name);
   GEOJCBB_OPTIONS(GEOJCBB_FROM_C)
 #undef GEOJCBB_FROM_C
+}
+
+inline StepSettings<float> from_c(const geojcbb_settings& c) {
+  StepSettings<float> s;
+  from_c(c, s);
   return s;
 }
 

@@ -283,8 +283,9 @@ TEST_CASE_TEMPLATE("the landmark rules and known landmarks allocate nothing", T,
   CHECK(guard.allocations() == 0);
 }
 
-TEST_CASE_TEMPLATE("a full map: new landmarks refused, or with evict_when_full the least-seen far one evicted, ids stable",
-                   T, float, double) {
+TEST_CASE_TEMPLATE(
+    "a full map: new landmarks refused, or with evict_when_full the least-seen far one evicted, ids stable", T, float,
+    double) {
   // Four landmarks fit. At the origin L0 is seen on four scans and L1 (new at the third) on two;
   // 30 m on, L2 and L3 fill the map, and L4 needs room. Off: L4 is refused and counted. On: L1 goes
   // (beyond r + d = 10 m and the least seen), every other landmark keeps its id and estimate, and
@@ -308,7 +309,8 @@ TEST_CASE_TEMPLATE("a full map: new landmarks refused, or with evict_when_full t
     double x = 0;
     auto scan = [&](std::initializer_list<Vec2<double>> ls) {
       obs->clear();
-      for (const Vec2<double>& l : ls) REQUIRE(obs->push(observe(Pose2<double>{x, 0, 0}, l).cast<T>(), R) == Status::kOk);
+      for (const Vec2<double>& l : ls)
+        REQUIRE(obs->push(observe(Pose2<double>{x, 0, 0}, l).cast<T>(), R) == Status::kOk);
       REQUIRE(step->step(*obs, *res) == Status::kOk);
     };
     const Vec2<double> L0(3, 0.5), L1(4, -1), L2(33, 1), L3(34, -1), L4(35, 2), L5(2, 2);

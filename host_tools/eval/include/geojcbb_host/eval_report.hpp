@@ -175,8 +175,9 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
   for (const ReportRow& r : rows) {
     if (r.failed > 0) std::fprintf(f, "  %s: %d runs failed: %s\n", r.name.c_str(), r.failed, r.error.c_str());
     if (r.full_runs > 0)
-      std::fprintf(f, "  %s: the map filled in %d runs; %d observations were not added as landmarks, %d landmarks evicted\n",
-                   r.name.c_str(), r.full_runs, r.not_augmented, r.evicted);
+      std::fprintf(
+          f, "  %s: the map filled in %d runs; %d observations were not added as landmarks, %d landmarks evicted\n",
+          r.name.c_str(), r.full_runs, r.not_augmented, r.evicted);
   }
 }
 
