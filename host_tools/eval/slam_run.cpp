@@ -418,7 +418,8 @@ SimSource::SimSource(const Scenario& sc, std::uint64_t seed, int max_steps)
   const Eigen::Vector2d d = sc.waypoints[1] - sc.waypoints[0];
   x0 = Pose2<double>{sc.waypoints[0].x(), sc.waypoints[0].y(), std::atan2(d.y(), d.x())};
   P0 = Eigen::Matrix3d::Identity() * 1e-12;
-  sensor = SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad, sc.sigma_bearing_rad};
+  sensor = SensorModel{sc.min_range_m, sc.max_range_m, sc.fov_rad,         sc.sigma_bearing_rad,
+                       sc.sensor_x_m,  sc.sensor_y_m,  sc.sensor_theta_rad};
   true_landmarks = sc.landmarks.size();
   rewind();
 }

@@ -96,6 +96,12 @@ Scenario load_scenario(const std::string& path) {
     s.detection_probability = j.value("detection_probability", s.detection_probability);
     s.clutter_per_scan = j.value("clutter_per_scan", s.clutter_per_scan);
     s.noise_scale = j.value("noise_scale", s.noise_scale);
+    if (j.contains("sensor_mount")) {  // {"x_m", "y_m", "theta_deg"}
+      const auto& m = j.at("sensor_mount");
+      s.sensor_x_m = m.value("x_m", 0.0);
+      s.sensor_y_m = m.value("y_m", 0.0);
+      s.sensor_theta_rad = m.value("theta_deg", 0.0) * kPi<double> / 180;
+    }
     if (j.contains("kidnap")) {  // {"t_s", "dx_m", "dy_m", "dtheta_deg", "sigma_xy_m", "sigma_theta_deg"}
       const auto& k = j.at("kidnap");
       s.kidnap_t_s = k.at("t_s").get<double>();
@@ -154,7 +160,8 @@ bool Simulator::step(SimStep& out) {
   const Eigen::Matrix2d R =
       Eigen::Vector2d(s_.sigma_range_m * s_.sigma_range_m, s_.sigma_bearing_rad * s_.sigma_bearing_rad).asDiagonal();
   for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
-    const Vec2<double> z = observe(x_, Vec2<double>(s_.landmarks[j]));
+    const Vec2<double> z =
+        observe(x_, Mount<double>{s_.sensor_x_m, s_.sensor_y_m, s_.sensor_theta_rad}, Vec2<double>(s_.landmarks[j]));
     if (z.x() > s_.max_range_m || z.x() < s_.min_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
     if (u(rng_) >= s_.detection_probability) continue;
     out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),

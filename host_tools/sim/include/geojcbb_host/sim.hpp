@@ -39,6 +39,9 @@ struct Scenario {
   double fov_rad = 3.14159265358979;      ///< full field of view (centred ahead)
   double sigma_range_m = 0.1;             ///< (Bailey: 0.1 m)
   double sigma_bearing_rad = 0.01745329;  ///< (Bailey: 1 deg)
+  /// Where the sensor sits on the robot (JSON "sensor_mount": {"x_m", "y_m", "theta_deg"}): every
+  /// observation is taken from there (core/range_bearing.hpp's Mount); the filter is told.
+  double sensor_x_m = 0, sensor_y_m = 0, sensor_theta_rad = 0;
   double detection_probability = 1.0;
   double clutter_per_scan = 0.0;  ///< mean of a Poisson count per scan
   /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas
