@@ -379,11 +379,6 @@ int run_replay(const ReplayOptions& o) {
     base.known_map = positions;
   }
   const std::vector<Method> strategies = select_methods(o.strategies, true, o.oracle);
-  if (o.runner && !log.increments.empty()) {  // before any strategy runs, not once per strategy
-    throw std::runtime_error(
-        "a log of pose increments (odom_delta) cannot be streamed to a device: ODOMETRY carries "
-        "(v, w) only; replay it in process");
-  }
   if (o.runner && !log.gps.empty()) {
     std::printf("GPS scoring needs the pose after every input, which a device does not report: not scored\n");
   }

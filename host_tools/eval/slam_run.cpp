@@ -473,6 +473,18 @@ RunInput SimSource::prediction(const Scenario& sc, const SimStep& step) {
   in.dt_s = sc.dt_s;
   in.sigma_v_mps = sc.sigma_v_mps;
   in.sigma_w_radps = sc.sigma_w_radps;
+  if (sc.odometry_increments) {  // the velocity model's motion from the origin, and its covariance
+    const ekf::Odometry<double> u{in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps};
+    Mat32<double> J;
+    const Pose2<double> d = ekf::move(Pose2<double>{0, 0, 0}, u, static_cast<Mat3<double>*>(nullptr), &J);
+    in.increment = true;
+    in.dx_m = d.x;
+    in.dy_m = d.y;
+    in.dtheta_rad = d.theta;
+    in.increment_cov =
+        J * Eigen::Vector2d(in.sigma_v_mps * in.sigma_v_mps, in.sigma_w_radps * in.sigma_w_radps).asDiagonal() *
+        J.transpose();
+  }
   return in;
 }
 

@@ -154,6 +154,8 @@ void LinkClient::ping(std::uint32_t nonce) {
 
 void LinkClient::odometry(const proto::Odometry& o) { send_stream(o, false, 0); }
 
+void LinkClient::odom_delta(const proto::OdomDelta& d) { send_stream(d, false, 0); }
+
 void LinkClient::relocalise(const proto::Relocalise& r) { send_stream(r, false, 0); }
 
 void LinkClient::send_scan(const LinkObsBatch& b) { send_stream(b, true, b.batch_id); }

@@ -137,6 +137,16 @@ void LinkSession::odometry(const proto::Odometry& o) {
   });
 }
 
+void LinkSession::odom_delta(const proto::OdomDelta& d) {
+  bool sent = false;
+  guarded("ODOM_DELTA", true, [&] {
+    if (!sent) {
+      sent = true;
+      client_->odom_delta(d);
+    }
+  });
+}
+
 void LinkSession::relocalise(const proto::Relocalise& r) {
   bool sent = false;
   guarded("RELOCALISE", true, [&] {

@@ -98,7 +98,7 @@ proto::Reset link_reset(const Scenario& sc) {
 
 proto::Odometry link_odometry(const RunInput& in) {
   if (in.increment) {  // refused, not converted: (v, w) would drop the lateral part and the covariance
-    throw std::runtime_error("a pose increment (odom_delta) cannot be sent: ODOMETRY carries (v, w) only");
+    throw std::runtime_error("a pose increment goes as ODOM_DELTA (link_odom_delta), not ODOMETRY");
   }
   proto::Odometry o;
   o.v_mps = static_cast<float>(in.v_mps);
@@ -107,6 +107,17 @@ proto::Odometry link_odometry(const RunInput& in) {
   o.sigma_v_mps = static_cast<float>(in.sigma_v_mps);
   o.sigma_w_radps = static_cast<float>(in.sigma_w_radps);
   return o;
+}
+
+proto::OdomDelta link_odom_delta(const RunInput& in) {
+  proto::OdomDelta d;
+  d.dx_m = static_cast<float>(in.dx_m);
+  d.dy_m = static_cast<float>(in.dy_m);
+  d.dtheta_rad = static_cast<float>(in.dtheta_rad);
+  const Eigen::Matrix3d& C = in.increment_cov;
+  d.cov_upper = {static_cast<float>(C(0, 0)), static_cast<float>(C(0, 1)), static_cast<float>(C(0, 2)),
+                 static_cast<float>(C(1, 1)), static_cast<float>(C(1, 2)), static_cast<float>(C(2, 2))};
+  return d;
 }
 
 proto::Relocalise link_relocalise(const Eigen::Matrix3d& P) {
@@ -211,7 +222,11 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       continue;
     }
     if (!in.scan) {
-      link.odometry(link_odometry(in));
+      if (in.increment) {
+        link.odom_delta(link_odom_delta(in));
+      } else {
+        link.odometry(link_odometry(in));
+      }
       continue;
     }
     InFlight f;

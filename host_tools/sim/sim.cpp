@@ -96,6 +96,7 @@ Scenario load_scenario(const std::string& path) {
     s.detection_probability = j.value("detection_probability", s.detection_probability);
     s.clutter_per_scan = j.value("clutter_per_scan", s.clutter_per_scan);
     s.noise_scale = j.value("noise_scale", s.noise_scale);
+    s.odometry_increments = j.value("odometry_increments", s.odometry_increments);
     if (j.contains("sensor_mount")) {  // {"x_m", "y_m", "theta_deg"}
       const auto& m = j.at("sensor_mount");
       s.sensor_x_m = m.value("x_m", 0.0);

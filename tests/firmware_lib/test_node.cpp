@@ -437,3 +437,51 @@ TEST_CASE("node: stream frames stay fresh across the 16-bit seq wrap and long ru
   for (const Reply& r : replies(h.out)) errors += r.type == static_cast<std::uint8_t>(proto::MsgType::kError);
   CHECK(errors == 0);
 }
+
+TEST_CASE("node: ODOM_DELTA predicts with the increment and its covariance; a bad covariance is refused") {
+  // The device applies a pose increment exactly as SlamStep::predict(PoseIncrement) does in process
+  // (the same float arithmetic), once per seq; a covariance that is not positive semi-definite is
+  // an ERROR and changes nothing.
+  using NB = DefaultBounds;
+  auto node = std::make_unique<node::Node<float, NB>>();
+  std::vector<std::uint8_t> sink;
+  node->start(node::Output{&sink,
+                           [](void* c, const std::uint8_t* p, std::size_t n) {
+                             auto& b = *static_cast<std::vector<std::uint8_t>*>(c);
+                             b.insert(b.end(), p, p + n);
+                           }},
+              7);
+  auto feed = [&](const auto& m, std::uint16_t seq) {
+    proto::EncodedFrame f;
+    REQUIRE(proto::encode_message(m, seq, 0, f) == proto::Error::kOk);
+    node->on_bytes(f.bytes.data(), f.size);
+  };
+  feed(proto::Hello{}, 0);
+  feed(proto::Config{}, 1);
+  feed(proto::Reset{}, 2);
+  auto ref = std::make_unique<node::SlamStep<float, NB>>();
+  REQUIRE(ref->configure(node::StepSettings<float>{}) == Status::kOk);
+  REQUIRE(ref->reset(node->slam_step().slam().pose(), node->slam_step().slam().pose_covariance()) == Status::kOk);
+  proto::OdomDelta d;
+  d.dx_m = 0.5f;
+  d.dy_m = 0.125f;
+  d.dtheta_rad = 0.0625f;
+  d.cov_upper = {1e-3f, 1e-5f, 0.0f, 5e-4f, 1e-6f, 2e-4f};
+  feed(d, 3);
+  Mat3<float> C;
+  C << 1e-3f, 1e-5f, 0.0f, 1e-5f, 5e-4f, 1e-6f, 0.0f, 1e-6f, 2e-4f;
+  REQUIRE(ref->predict(ekf::PoseIncrement<float>{0.5f, 0.125f, 0.0625f, C}) == Status::kOk);
+  const Pose2<float> x = node->slam_step().slam().pose();
+  CHECK(x.x == ref->slam().pose().x);
+  CHECK(x.y == ref->slam().pose().y);
+  CHECK(x.theta == ref->slam().pose().theta);
+  CHECK(node->slam_step().slam().pose_covariance() == ref->slam().pose_covariance());
+  feed(d, 3);  // a retransmission: not applied twice
+  CHECK(node->slam_step().slam().pose().x == x.x);
+  const std::uint32_t invalid_before = node->stats().invalid_field;
+  d.cov_upper = {1e-3f, 0.0f, 0.0f, -1e-3f, 0.0f, 1e-4f};  // a negative variance
+  feed(d, 4);
+  CHECK(node->slam_step().slam().pose().x == x.x);
+  CHECK(node->slam_step().slam().pose_covariance() == ref->slam().pose_covariance());
+  CHECK(node->stats().invalid_field == invalid_before + 1);
+}

@@ -151,6 +151,15 @@ inline Relocalise sample<Relocalise>() {
   return r;
 }
 template <>
+inline OdomDelta sample<OdomDelta>() {
+  OdomDelta d{};
+  d.dx_m = 0.25f;
+  d.dy_m = -0.0625f;
+  d.dtheta_rad = 0.03125f;
+  d.cov_upper = {1e-4f, 1e-6f, -2e-6f, 4e-5f, 3e-7f, 2e-6f};
+  return d;
+}
+template <>
 inline Odometry sample<Odometry>() {
   Odometry o{};
   o.v_mps = 0.8f;

@@ -94,7 +94,10 @@ bool is_psd3(const Mat3<T>& m) {
       if (m(a, a) * m(b, b) - m(a, b) * m(a, b) < -tol * m(a, a) * m(b, b)) return false;
     }
   }
-  return m.determinant() >= -tol * m(0, 0) * m(1, 1) * m(2, 2);
+  // The determinant by cofactors (no Eigen/LU on the device).
+  const T det = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) - m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
+                m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+  return det >= -tol * m(0, 0) * m(1, 1) * m(2, 2);
 }
 
 /// A calibrated drive: the commanded (v, w) scaled to the motion they produce, and a process noise

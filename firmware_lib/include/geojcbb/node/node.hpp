@@ -8,6 +8,7 @@
 //   CONFIG, RESET   ACK, or NACK with the reason (nothing changes)
 //   SHUTDOWN        ACK, then the board's shutdown hook (Output::shutdown) with the exit code
 //   ODOMETRY        predict (needs CONFIG and RESET first)
+//   ODOM_DELTA      predict with a pose increment and its covariance (instead of ODOMETRY)
 //   OBS_BATCH       one SLAM step: ASSOC_RESULT then POSE, or ERROR (nothing changes); then STATS
 //                   when CONFIG's stats_period_scans is N > 0 and this is the N-th scan since the last
 //   retransmission  a stream frame (ODOMETRY, OBS_BATCH) whose seq is not newer than the last applied
@@ -304,6 +305,7 @@ class Node {
       case proto::MsgType::kRelocalise: e = serve<proto::Relocalise>(f); break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
+      case proto::MsgType::kOdomDelta: e = serve<proto::OdomDelta>(f); break;
       case proto::MsgType::kStatsRequest: e = serve<proto::StatsRequest>(f); break;
       case proto::MsgType::kObsBatch:
         e = take(f, rx_batch_);
@@ -397,6 +399,23 @@ class Node {
     if (!running() || !fresh()) return;  // a retransmitted ODOMETRY was applied already
     const std::uint32_t t0 = clock_ ? clock_() : 0;
     const Status st = step_.predict(odometry_from<T>(m));
+    last_predict_ = clock_ ? clock_() - t0 : 0;
+    if (st != Status::kOk) {
+      invalid();
+      return;
+    }
+    applied();
+  }
+
+  /// Out of line: its increment and covariance stay out of handle()'s frame (the call chain's
+  /// budget, docs/firmware.md).
+  [[gnu::noinline]] void on_message(const proto::OdomDelta& m) {
+    if (!running() || !fresh()) return;  // a retransmitted ODOM_DELTA was applied already
+    const std::uint32_t t0 = clock_ ? clock_() : 0;
+    const auto& u = m.cov_upper;
+    ekf::PoseIncrement<T> d{T(m.dx_m), T(m.dy_m), T(m.dtheta_rad), Mat3<T>::Zero()};
+    d.cov << T(u[0]), T(u[1]), T(u[2]), T(u[1]), T(u[3]), T(u[4]), T(u[2]), T(u[4]), T(u[5]);
+    const Status st = step_.predict(d);
     last_predict_ = clock_ ? clock_() - t0 : 0;
     if (st != Status::kOk) {
       invalid();

@@ -57,6 +57,8 @@ class LinkClient {
   void configure(const proto::Config& c);
   void reset(const proto::Reset& r);
   void odometry(const proto::Odometry& o);
+  /// ODOM_DELTA, a stream frame instead of ODOMETRY: a pose increment with its covariance.
+  void odom_delta(const proto::OdomDelta& d);
   /// RELOCALISE, a stream frame as ODOMETRY: the pose covariance re-set (the relocaliser then takes over).
   void relocalise(const proto::Relocalise& r);
   struct ScanReply {

@@ -44,6 +44,7 @@ class LinkSession : public ScanLink {
   void configure(const proto::Config& c) override;
   void reset(const proto::Reset& r) override;
   void odometry(const proto::Odometry& o) override;
+  void odom_delta(const proto::OdomDelta& d) override;
   void relocalise(const proto::Relocalise& r) override;
   void send_scan(const LinkObsBatch& b) override;
   LinkClient::ScanReply receive_scan(std::uint32_t batch_id) override;

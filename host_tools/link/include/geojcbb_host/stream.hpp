@@ -42,6 +42,8 @@ proto::Odometry link_odometry(const RunInput& in);
 proto::Odometry link_odometry(const Scenario& sc, const SimStep& step);
 /// A kidnap's pose covariance as RELOCALISE (float32 on the wire).
 proto::Relocalise link_relocalise(const Eigen::Matrix3d& P);
+/// A pose increment input (RunInput::increment) as ODOM_DELTA.
+proto::OdomDelta link_odom_delta(const RunInput& in);
 /// The scan's observations, nearest first, at most max_obs (<= kLinkMaxObs), each with its
 /// covariance; `kept` receives their truths.
 LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t batch_id, std::size_t max_obs,
@@ -58,6 +60,8 @@ class ScanLink {
   virtual void configure(const proto::Config& c) = 0;
   virtual void reset(const proto::Reset& r) = 0;
   virtual void odometry(const proto::Odometry& o) = 0;
+  /// ODOM_DELTA (a stream frame, instead of ODOMETRY).
+  virtual void odom_delta(const proto::OdomDelta& d) = 0;
   /// RELOCALISE (a stream frame, as ODOMETRY).
   virtual void relocalise(const proto::Relocalise& r) = 0;
   virtual void send_scan(const LinkObsBatch& b) = 0;
@@ -73,6 +77,7 @@ class PlainLink : public ScanLink {
   void configure(const proto::Config& c) override { c_.configure(c); }
   void reset(const proto::Reset& r) override { c_.reset(r); }
   void odometry(const proto::Odometry& o) override { c_.odometry(o); }
+  void odom_delta(const proto::OdomDelta& d) override { c_.odom_delta(d); }
   void relocalise(const proto::Relocalise& r) override { c_.relocalise(r); }
   void send_scan(const LinkObsBatch& b) override { c_.send_scan(b); }
   LinkClient::ScanReply receive_scan(std::uint32_t id) override { return c_.receive_scan(id); }

@@ -42,6 +42,9 @@ struct Scenario {
   /// Where the sensor sits on the robot (JSON "sensor_mount": {"x_m", "y_m", "theta_deg"}): every
   /// observation is taken from there (core/range_bearing.hpp's Mount); the filter is told.
   double sensor_x_m = 0, sensor_y_m = 0, sensor_theta_rad = 0;
+  /// The filter (and a device, as ODOM_DELTA) gets each interval's odometry as the pose increment
+  /// the velocity model gives, with its covariance, instead of (v, w) (JSON "odometry_increments").
+  bool odometry_increments = false;
   double detection_probability = 1.0;
   double clutter_per_scan = 0.0;  ///< mean of a Poisson count per scan
   /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas

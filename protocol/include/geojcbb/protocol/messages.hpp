@@ -33,6 +33,7 @@ enum class MsgType : std::uint8_t {
   kRelocalise = 0x0A,    ///< host -> device, stream
   kOdometry = 0x10,      ///< host -> device, stream
   kObsBatch = 0x11,      ///< host -> device, stream
+  kOdomDelta = 0x12,     ///< host -> device, stream
   kAssocResult = 0x20,   ///< device -> host
   kPose = 0x21,          ///< device -> host
   kStatsRequest = 0x30,  ///< host -> device
@@ -442,6 +443,28 @@ struct Odometry : Codec<Odometry> {
   }
 };
 
+/// ODOM_DELTA, host -> device (stream), instead of ODOMETRY: a pose increment (wheel odometry, a
+/// vehicle model) in the robot's frame at its start, with its covariance (positive semi-definite:
+/// the filter refuses anything else, and the device answers ERROR invalid field).
+struct OdomDelta : Codec<OdomDelta> {
+  static constexpr MsgType kType = MsgType::kOdomDelta;
+  static constexpr const char* kName = "ODOM_DELTA";
+
+  float dx_m = 0.0f;        ///< forward
+  float dy_m = 0.0f;        ///< to the left
+  float dtheta_rad = 0.0f;  ///< counter-clockwise
+  /// Covariance of (dx, dy, dtheta), upper triangle (c00, c01, c02, c11, c12, c22).
+  std::array<float, 6> cov_upper{0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("dx_m", &OdomDelta::dx_m, range::finite(), "m", "forward, robot frame"),
+                           field("dy_m", &OdomDelta::dy_m, range::finite(), "m", "to the left"),
+                           field("dtheta_rad", &OdomDelta::dtheta_rad, range::finite(), "rad", "counter-clockwise"),
+                           field("cov_upper", &OdomDelta::cov_upper, range::finite(), "",
+                                 "covariance of (dx, dy, dtheta): positive semi-definite", detail::kCovUpperNames));
+  }
+};
+
 /// One range-bearing observation with its measurement covariance R (symmetric positive definite).
 struct ObservationWire {
   static constexpr const char* kRule = "positive-definite";
@@ -660,7 +683,7 @@ struct MessageList {
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
 using AllMessages =
     MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry,
-                ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
+                OdomDelta, ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
 
 namespace detail {
 template <class... M>
@@ -736,6 +759,7 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 152 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
+                  OdomDelta::kPayloadSize == 36 &&
                   Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
                   ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
