@@ -20,8 +20,8 @@
 using namespace proto_test;
 
 TEST_CASE_TEMPLATE("protocol: round trip of every message, whole and one byte at a time", M, Hello, Capabilities,
-                   Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry, OdomDelta, ObsBatch, AssocResult, Pose,
-                   StatsRequest, Stats, ErrorReport) {
+                   Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry, OdomDelta, ObsBatch,
+                   AssocResult, Pose, StatsRequest, Stats, ErrorReport) {
   const M m = sample<M>();
   const Bytes payload = payload_of(m);
   CHECK(payload.size() == m.payload_size());

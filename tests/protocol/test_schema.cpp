@@ -112,9 +112,9 @@ TEST_CASE("protocol: swapping two same-size fields changes the wire and the sche
   REQUIRE(at != std::string::npos);
   for (const std::string& line :
        {line_of<Hello>(), line_of<Capabilities>(), line_of<Config>(), line_of<Ack>(), line_of<Nack>(), line_of<Ping>(),
-        line_of<Pong>(), line_of<Reset>(), line_of<Shutdown>(), line_of<Relocalise>(), line_of<Odometry>(), line_of<OdomDelta>(),
-        line_of<ObsBatch>(), line_of<AssocResult>(), line_of<Pose>(), line_of<StatsRequest>(), line_of<Stats>(),
-        line_of<ErrorReport>()}) {
+        line_of<Pong>(), line_of<Reset>(), line_of<Shutdown>(), line_of<Relocalise>(), line_of<Odometry>(),
+        line_of<OdomDelta>(), line_of<ObsBatch>(), line_of<AssocResult>(), line_of<Pose>(), line_of<StatsRequest>(),
+        line_of<Stats>(), line_of<ErrorReport>()}) {
     CAPTURE(line);
     CHECK(text.compare(at + 1, line.size(), line) == 0);
     at += line.size();

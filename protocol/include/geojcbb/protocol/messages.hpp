@@ -682,8 +682,8 @@ struct MessageList {
 };
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
 using AllMessages =
-    MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry,
-                OdomDelta, ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
+    MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry, OdomDelta,
+                ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
 
 namespace detail {
 template <class... M>
@@ -759,9 +759,9 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 152 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 &&
-                  Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 && ObsBatch::kFixedSize == 5 &&
-                  ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9,
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 &&
+                  ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
+                  AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto
