@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/report.hpp"
 
 namespace geojcbb::host {
@@ -160,24 +161,6 @@ MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibratio
   return m;
 }
 
-std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m) {
-  const std::size_t n = ds.landmarks.size();
-  std::vector<int> g(n);
-  for (std::size_t a = 0; a < n; ++a) g[a] = static_cast<int>(a);
-  for (bool changed = true; changed;) {  // connected components: merge until stable (n <= 15)
-    changed = false;
-    for (std::size_t a = 0; a < n; ++a)
-      for (std::size_t b = 0; b < n; ++b) {
-        const double d = std::hypot(ds.landmarks[a].x - ds.landmarks[b].x, ds.landmarks[a].y - ds.landmarks[b].y);
-        if (d <= radius_m && g[b] > g[a]) {
-          g[b] = g[a];
-          changed = true;
-        }
-      }
-  }
-  return g;
-}
-
 namespace {
 // mrclam.csv's columns between dataset, robot, strategy and error (report.hpp: run_csv).
 const std::vector<std::string> kMrclamCsvColumns{
@@ -259,16 +242,19 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     Job& jb = jobs[j];
     RunOptions ro = o.run;
     o.strategies[jb.s].apply(ro);
-    ro.landmark_group = landmark_groups(data[jb.d].ds, kLandmarkGroupRadius_m);
-    if (o.known_map) {
-      for (const mrclam::Landmark& l : data[jb.d].ds.landmarks) ro.known_map.emplace_back(l.x, l.y);
-    }
     const auto a = std::chrono::steady_clock::now();
     try {
+      // One input path: the robot converted to the own-log format (what convert-mrclam writes),
+      // replayed as any log (docs/replay.md); its landmark lines give the groups and the known map.
       const MrclamModel model = mrclam_model(
           data[jb.d].noise, data[jb.d].calibration.empty() ? mrclam::RobotCalibration{} : data[jb.d].calibration[jb.r],
           o.camera, o.drive, o.model_inflation);
-      MrclamSource src(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
+      const replay::EventLog log =
+          replay::mrclam_to_log(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
+      const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
+      ro.landmark_group = replay::landmark_groups(positions, kLandmarkGroupRadius_m);
+      if (o.known_map) ro.known_map = positions;
+      replay::LogSource src(log, replay::LogNoise{});
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
       jb.error = e.what();

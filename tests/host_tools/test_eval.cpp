@@ -7,6 +7,7 @@
 
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/slam_run.hpp"
 #include "support/data.hpp"
@@ -73,7 +74,7 @@ TEST_CASE(
 TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
   if (!geojcbb::test::have_mrclam()) return;
   const mrclam::Dataset ds = mrclam::load_dataset(mrclam::dataset_dir(6));
-  const std::vector<int> g = landmark_groups(ds, kLandmarkGroupRadius_m);
+  const std::vector<int> g = replay::landmark_groups(geojcbb::test::landmark_xy(ds), kLandmarkGroupRadius_m);
   REQUIRE(g.size() == 15);
   CHECK(std::set<int>(g.begin(), g.end()).size() == 6);  // six clusters of two or three landmarks
   const std::vector<mrclam::RobotLog> logs{mrclam::load_robot(ds, 1)};

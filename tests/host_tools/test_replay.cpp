@@ -127,7 +127,7 @@ TEST_CASE("replay: a converted MRCLAM robot replays to the MRCLAM replay's resul
         CAPTURE(m.name());
         RunOptions o = mrclam_run_defaults();
         m.apply(o);
-        o.landmark_group = landmark_groups(ds, kLandmarkGroupRadius_m);
+        o.landmark_group = replay::landmark_groups(geojcbb::test::landmark_xy(ds), kLandmarkGroupRadius_m);
         const RunResult a = replay_robot(ds, log, o, model, drop);
         from_log.rewind();
         const RunResult b = run_inputs(from_log, o);

@@ -10,6 +10,9 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "geojcbb_host/mrclam.hpp"
 #include "geojcbb_host/victoria_park.hpp"
@@ -38,6 +41,13 @@ inline bool have_data(const std::string& dir, const char* name, const char* env)
 
 /// The UTIAS MRCLAM data (datasets 6 and 7).
 inline bool have_mrclam() { return have_data(host::mrclam::default_data_dir(), "MRCLAM", "GEOJCBB_MRCLAM_DIR"); }
+
+/// A MRCLAM dataset's landmark positions in index order (for replay::landmark_groups).
+inline std::vector<Eigen::Vector2d> landmark_xy(const host::mrclam::Dataset& ds) {
+  std::vector<Eigen::Vector2d> p;
+  for (const host::mrclam::Landmark& l : ds.landmarks) p.emplace_back(l.x, l.y);
+  return p;
+}
 
 /// ACFR's Victoria Park (odometry, laser frames, tree detections, GPS).
 inline bool have_victoria_park() {

@@ -38,8 +38,7 @@ constexpr double kGapMotionStd = 0.2;
 /// (docs/mrclam.md).
 constexpr double kLandmarkGroupRadius_m = 0.35;
 
-/// Landmark index -> group (connected components of landmarks within radius_m).
-std::vector<int> landmark_groups(const mrclam::Dataset& ds, double radius_m);
+/// The groups themselves: replay::landmark_groups (event_log.hpp), on the log's landmark lines.
 
 /// Noise the filter assumes on MRCLAM. The odometry sigmas are rates: over dt
 /// the filter's (v, w) standard deviations are sigma * sqrt(1 s / dt), so the
