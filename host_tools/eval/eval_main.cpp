@@ -336,9 +336,9 @@ svg::Panel gps_panel(const std::string& title, const RunResult& r, const std::ve
   svg::Series est{"estimated antenna track", {}, {}, svg::Style::kLine, "#D55E00"};
   const std::size_t step = std::max<std::size_t>(1, r.trace.size() / svg::kMaxLinePoints);
   for (std::size_t k = 0; k < r.trace.size(); k += step) {
-    const Pose2<double>& x = r.trace[k].pose;
-    est.x.push_back(x.x + std::cos(x.theta) * o.antenna_x_m - std::sin(x.theta) * o.antenna_y_m);
-    est.y.push_back(x.y + std::sin(x.theta) * o.antenna_x_m + std::cos(x.theta) * o.antenna_y_m);
+    const Eigen::Vector2d at = antenna_at(r.trace[k].pose, o);
+    est.x.push_back(at.x());
+    est.y.push_back(at.y());
   }
   svg::Series map{"landmarks mapped", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
   for (const MapLandmark& m : r.map) {

@@ -5,6 +5,11 @@
 
 namespace geojcbb::host {
 
+Eigen::Vector2d antenna_at(const Pose2<double>& x, const GpsOptions& o) {
+  return {x.x + std::cos(x.theta) * o.antenna_x_m - std::sin(x.theta) * o.antenna_y_m,
+          x.y + std::sin(x.theta) * o.antenna_x_m + std::cos(x.theta) * o.antenna_y_m};
+}
+
 std::vector<replay::GpsEvent> screen_gps(const std::vector<replay::GpsEvent>& fixes, const GpsOptions& o,
                                          GpsScore& counts) {
   std::vector<replay::GpsEvent> kept;
@@ -47,11 +52,9 @@ GpsScore score_gps(const std::vector<TracePoint>& trace, const std::vector<repla
       continue;
     }
     const double f = b.t_s > a.t_s ? (g.t - a.t_s) / (b.t_s - a.t_s) : 0.0;
-    const double x = a.pose.x + f * (b.pose.x - a.pose.x), y = a.pose.y + f * (b.pose.y - a.pose.y);
-    const double th = a.pose.theta + f * wrap_angle(b.pose.theta - a.pose.theta);
-    const double ax = x + std::cos(th) * o.antenna_x_m - std::sin(th) * o.antenna_y_m;
-    const double ay = y + std::sin(th) * o.antenna_x_m + std::cos(th) * o.antenna_y_m;
-    const double e = std::hypot(ax - g.x, ay - g.y);
+    const Pose2<double> x{a.pose.x + f * (b.pose.x - a.pose.x), a.pose.y + f * (b.pose.y - a.pose.y),
+                          a.pose.theta + f * wrap_angle(b.pose.theta - a.pose.theta)};
+    const double e = (antenna_at(x, o) - Eigen::Vector2d(g.x, g.y)).norm();
     sum2 += e * e;
     if (e > s.max_m) {
       s.max_m = e;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <array>
 #include <stdexcept>
 
 #include <strings.h>
@@ -79,6 +80,12 @@ void check_capacity(const proto::Config& c, const proto::Capabilities& caps) {
   }
 }
 
+// A 3x3 covariance as the wire's upper triangle (c00, c01, c02, c11, c12, c22), in float.
+static std::array<float, 6> upper_of(const Eigen::Matrix3d& P) {
+  return {static_cast<float>(P(0, 0)), static_cast<float>(P(0, 1)), static_cast<float>(P(0, 2)),
+          static_cast<float>(P(1, 1)), static_cast<float>(P(1, 2)), static_cast<float>(P(2, 2))};
+}
+
 proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0) {
   Eigen::Matrix3d P = P0;
   for (int k = 0; k < 3; ++k) P(k, k) = std::max(P(k, k), 1e-6);
@@ -86,8 +93,7 @@ proto::Reset link_reset(const Pose2<double>& x0, const Eigen::Matrix3d& P0) {
   r.x_m = static_cast<float>(x0.x);
   r.y_m = static_cast<float>(x0.y);
   r.theta_rad = static_cast<float>(x0.theta);
-  r.cov_upper = {static_cast<float>(P(0, 0)), static_cast<float>(P(0, 1)), static_cast<float>(P(0, 2)),
-                 static_cast<float>(P(1, 1)), static_cast<float>(P(1, 2)), static_cast<float>(P(2, 2))};
+  r.cov_upper = upper_of(P);
   return r;
 }
 
@@ -114,16 +120,13 @@ proto::OdomDelta link_odom_delta(const RunInput& in) {
   d.dx_m = static_cast<float>(in.dx_m);
   d.dy_m = static_cast<float>(in.dy_m);
   d.dtheta_rad = static_cast<float>(in.dtheta_rad);
-  const Eigen::Matrix3d& C = in.increment_cov;
-  d.cov_upper = {static_cast<float>(C(0, 0)), static_cast<float>(C(0, 1)), static_cast<float>(C(0, 2)),
-                 static_cast<float>(C(1, 1)), static_cast<float>(C(1, 2)), static_cast<float>(C(2, 2))};
+  d.cov_upper = upper_of(in.increment_cov);
   return d;
 }
 
 proto::Relocalise link_relocalise(const Eigen::Matrix3d& P) {
   proto::Relocalise m;
-  m.cov_upper = {static_cast<float>(P(0, 0)), static_cast<float>(P(0, 1)), static_cast<float>(P(0, 2)),
-                 static_cast<float>(P(1, 1)), static_cast<float>(P(1, 2)), static_cast<float>(P(2, 2))};
+  m.cov_upper = upper_of(P);
   return m;
 }
 

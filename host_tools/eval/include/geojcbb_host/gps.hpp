@@ -34,6 +34,9 @@ struct GpsScore {
   std::vector<double> error_m;
 };
 
+/// Where the antenna is when the robot is at x.
+Eigen::Vector2d antenna_at(const Pose2<double>& x, const GpsOptions& o);
+
 /// The fixes kept by the screening (in order), with the counts of those rejected.
 std::vector<replay::GpsEvent> screen_gps(const std::vector<replay::GpsEvent>& fixes, const GpsOptions& o,
                                          GpsScore& counts);
