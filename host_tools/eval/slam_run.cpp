@@ -123,7 +123,6 @@ RunResult RunScorer::finish() const {
 struct SlamSession::State {
   node::SlamStep<double, EB> step;
   Observations<double, EB> obs;
-  Association<double, EB> out;
   node::StepResult<double, EB> result;
   RunOptions opt;
   std::unique_ptr<RunScorer> scorer;
@@ -131,38 +130,54 @@ struct SlamSession::State {
   std::vector<FeatureId> paired;  // scratch: the scan's pairings
 };
 
-// The ground-truth association: each observation of a mapped landmark is paired with the candidate
-// made from that landmark (the most-seen one when there are duplicates) if its individual d2 passes
-// chi2(0.999, 2), which still rejects the data's gross outliers; clutter and landmarks not yet
-// mapped stay unpaired (kNewFeature, with d2 to the nearest candidate for the second gate).
-static void oracle_associate(SlamSession::State& s, const std::vector<SimObservation>& scan) {
+// The ground-truth association (the step's association override): each observation of a mapped
+// landmark is paired with the candidate made from that landmark (the most-seen one when there are
+// duplicates) if its individual d2 passes chi2(0.999, 2), which still rejects the data's gross
+// outliers; clutter and landmarks not yet mapped stay unpaired (kNewFeature, with d2 to the nearest
+// candidate for the second gate).
+struct OracleContext {
+  const RunScorer* scorer;
+  const std::vector<SimObservation>* scan;
+};
+static Status oracle_associate(void* ctx, const Observations<double, EB>& obs, const Prediction<double, EB>& pred,
+                               const node::MapView<double, EB>& map, Association<double, EB>& out) {
+  const auto& c = *static_cast<const OracleContext*>(ctx);
   double gate = 0;
   check(chi2_inv(0.999, 2, gate), "chi2_inv");
-  s.out.count = s.obs.count;
-  s.out.joint_d2 = 0;
-  s.out.diag = AssociationDiagnostics{};
-  for (int i = 0; i < s.obs.count; ++i) {
-    const int t = scan[static_cast<std::size_t>(i)].truth;
+  out.count = obs.count;
+  out.joint_d2 = 0;
+  out.diag = AssociationDiagnostics{};
+  for (int i = 0; i < obs.count; ++i) {
+    const int t = (*c.scan)[static_cast<std::size_t>(i)].truth;
     double best_d2 = std::numeric_limits<double>::infinity(), nearest = best_d2;
     FeatureId best = kNewFeature;
     int best_hits = -1;
-    const Prediction<double, EB>& pred = s.step.prediction();
     for (int a = 0; a < pred.count; ++a) {
-      const Eigen::Matrix2d S = pred.C.block(a, a) + s.obs.R[i];
-      const Eigen::Vector2d nu = innovation(s.obs.z[i], pred.h[a]);
+      const Eigen::Matrix2d S = pred.C.block(a, a) + obs.R[i];
+      const Eigen::Vector2d nu = innovation(obs.z[i], pred.h[a]);
       const double d2 = nu.dot(S.ldlt().solve(nu));
       nearest = std::min(nearest, d2);
       const FeatureId id = pred.id[a];
-      const int hits = s.step.slam().hits(s.step.slam().index_of(id));
-      if (t >= 0 && s.scorer->truth_of(id) == t && d2 < gate && hits > best_hits) {
+      const int k = map.slot_of(id);  // a candidate is a mapped landmark: k >= 0
+      const int hits = k >= 0 ? map.hits(k) : -1;
+      if (t >= 0 && c.scorer->truth_of(id) == t && d2 < gate && hits > best_hits) {
         best = id;
         best_d2 = d2;
         best_hits = hits;
       }
     }
-    s.out.feature[i] = best;
-    s.out.d2[i] = best == kNewFeature ? nearest : best_d2;
+    out.feature[i] = best;
+    out.d2[i] = best == kNewFeature ? nearest : best_d2;
   }
+  return Status::kOk;
+}
+
+// The evaluation's clock for StageCounts: nanoseconds of the steady clock, modulo 2^32 (a stage
+// takes well under 4 s, so differences are exact).
+static std::uint32_t steady_ns() {
+  return static_cast<std::uint32_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count());
 }
 
 std::vector<Method> select_methods(const std::vector<std::string>& names, bool all_presets, bool oracle) {
@@ -174,25 +189,11 @@ std::vector<Method> select_methods(const std::vector<std::string>& names, bool a
     if (all_presets) out.push_back({Strategy::kPcjcbb, false, true, true, true});  // kRobustPreset
   }
   for (const std::string& n : names) {
-    Method m;
-    // The suffix letters: V goes to parse_strategy, R, L, T, H and C are the step's pieces.
-    const std::size_t plus = n.find('+');
-    std::string base = n.substr(0, plus), verify;
-    bool ok = true;
-    for (std::size_t i = plus == std::string::npos ? n.size() : plus + 1; i < n.size(); ++i) {
-      const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(n[i])));
-      ok = ok && (c == 'V' || c == 'R' || c == 'L' || c == 'T' || c == 'H' || c == 'C');
-      if (c == 'V') verify = "+V";
-      m.relocalise = m.relocalise || c == 'R';
-      m.loop_check = m.loop_check || c == 'L';
-      m.tentative = m.tentative || c == 'T';
-      m.window = m.window || c == 'H';
-      m.clusters = m.clusters || c == 'C';
-    }
-    if (plus + 1 == n.size()) ok = false;  // a bare "+"
-    if (!ok || !parse_strategy((base + verify).c_str(), m.strategy, m.verify)) {
+    Preset p;
+    if (!parse_preset(n.c_str(), p)) {
       throw std::invalid_argument("unknown strategy '" + n + "' (" + kPresetsHelp + ")");
     }
+    const Method m = Method::from(p);
     out.push_back(m);
   }
   if (oracle) out.push_back({Strategy::kJcbb, true, false});
@@ -271,53 +272,35 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   }
   s.obs.clear();
   for (const SimObservation& o : scan) check(s.obs.push(o.z, o.R), "push");
-  const auto t0 = std::chrono::steady_clock::now();
-  node::RelocStats reloc;
-  check(s.step.localise(s.obs, reloc), "localise");
-  const bool lost = s.step.localisation() == node::Localisation::kLost;
-  if (lost) {  // not aligned: the scan is not used
-    node::SlamStep<double, EB>::unused(s.obs, s.result);
-    s.out.count = s.obs.count;
-    s.out.diag = AssociationDiagnostics{};
-    for (int i = 0; i < s.obs.count; ++i) s.out.feature[i] = kUnmatched;
-  } else {
-    ekf::LocalMapStats ls;
-    check(s.step.prepare(ls), "predict_local");
-    if (s.opt.oracle) {
-      oracle_associate(s, scan);
-    } else {
-      check(s.step.associate_prepared(s.obs, s.out), "associate");
-      reloc::LoopStats<double> loop;
-      check(s.step.check_loop(s.obs, s.out, loop), "check_loop");
-      res.loop_commits += loop.verdict == reloc::LoopVerdict::kCommitted;
-      res.loop_held_scans += loop.verdict == reloc::LoopVerdict::kPending;
-      reloc::WindowStats<double> window;
-      check(s.step.check_hypotheses(s.obs, s.out, window), "check_hypotheses");
-      res.windows += window.verdict == reloc::WindowVerdict::kOpened;
-      res.window_commits += window.verdict == reloc::WindowVerdict::kCommitted;
-      res.regrouped += window.regrouped;
-      res.window_held_scans += window.verdict == reloc::WindowVerdict::kOpened ||
-                               window.verdict == reloc::WindowVerdict::kHeld ||
-                               window.verdict == reloc::WindowVerdict::kExpired;
-    }
-  }
-  const double assoc_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // The device's step, with the ground truth's association in its place when asked.
+  OracleContext oracle{s.scorer.get(), &scan};
+  const node::AssociationOverride<double, EB> by_truth{oracle_associate, &oracle};
+  check(s.step.step(s.obs, s.result, steady_ns, s.opt.oracle ? &by_truth : nullptr), "step");
+  const node::StepResult<double, EB>& r = s.result;
+  const node::RelocStats& reloc = r.reloc;
+  res.loop_commits += r.loop.verdict == reloc::LoopVerdict::kCommitted;
+  res.loop_held_scans += r.loop.verdict == reloc::LoopVerdict::kPending;
+  res.windows += r.window.verdict == reloc::WindowVerdict::kOpened;
+  res.window_commits += r.window.verdict == reloc::WindowVerdict::kCommitted;
+  res.regrouped += r.window.regrouped;
+  res.window_held_scans += r.window.verdict == reloc::WindowVerdict::kOpened ||
+                           r.window.verdict == reloc::WindowVerdict::kHeld ||
+                           r.window.verdict == reloc::WindowVerdict::kExpired;
+  // The association's time: the relocaliser, the local map, the association and the stages that
+  // edit it (not the update).
+  const double assoc_s = 1e-9 * (double(r.counts.relocalise) + double(r.counts.predict_local) +
+                                 double(r.counts.associate) + double(r.counts.loop) + double(r.counts.window));
   res.association_s += assoc_s;
-  res.budget_hits += s.out.diag.node_budget_hit;
+  res.budget_hits += r.diag.node_budget_hit;
   s.truth.clear();
   s.paired.clear();
   for (std::size_t i = 0; i < scan.size(); ++i) {
     s.truth.push_back(scan[i].truth);
-    s.paired.push_back(s.out.feature[i]);
+    s.paired.push_back(r.outcome[i] == node::Outcome::kPaired ? r.feature[i] : kNewFeature);
   }
   const int tp0 = res.score.tp, fp0 = res.score.fp;
-  sc.score(s.truth, s.paired);
+  sc.score(s.truth, s.paired);  // before this scan's new landmarks are added
   const int scan_tp = res.score.tp - tp0, scan_fp = res.score.fp - fp0;
-  // Update, augment and review: the device's code (node::SlamStep).
-  if (!lost) {
-    check(s.step.commit(s.obs, s.out, s.result), "update");
-    s.step.confirm(s.result, s.out.jointly_compatible, reloc);
-  }
   res.relocalisations += reloc.relocalised;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
@@ -332,9 +315,9 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   res.merges += s.result.review.merged;
   res.evicted += s.result.review.evicted;
   for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (s.out.feature[i] < 0) continue;
+    if (r.outcome[i] != node::Outcome::kPaired) continue;
     ++res.nis_pairings;
-    res.nis_sum += s.out.d2[i];
+    res.nis_sum += r.d2[i];
   }
   if (s.result.review.removed > 0 || s.result.review.merged > 0 || s.result.review.evicted > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
@@ -355,9 +338,9 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   int paired = 0;
   double nis = 0;
   for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (s.out.feature[i] < 0) continue;
+    if (r.outcome[i] != node::Outcome::kPaired) continue;
     ++paired;
-    nis += s.out.d2[i];
+    nis += r.d2[i];
   }
   sc.nis(paired, nis);
   res.steps.back().tp = scan_tp;

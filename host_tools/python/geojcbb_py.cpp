@@ -10,6 +10,7 @@
 #include <string>
 
 #include "geojcbb/associate.hpp"
+#include "geojcbb/core/presets.hpp"
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb_host/sim.hpp"
 
@@ -50,14 +51,14 @@ void check(Status s, const char* what) {
 }
 
 /// The settings from keyword arguments, each named as its option (core/options.h); "strategy" as a
-/// name ("+V" switches the verification in, as for the command-line tools).
+/// preset's name with its suffixes, read by the command-line tools' grammar (core/presets.hpp).
 StepSettings<T> parse_settings(const std::string& strategy, const py::kwargs& kw) {
   StepSettings<T> s;
-  bool verify = false;
-  if (!parse_strategy(strategy.c_str(), s.strategy, verify)) {
+  Preset preset;
+  if (!parse_preset(strategy.c_str(), preset)) {
     raise(Status::kInvalidInput, "unknown strategy '" + strategy + "'");
   }
-  s.verify = verify;
+  apply_preset(preset, s);
   for (auto item : kw) {
     const std::string k = py::cast<std::string>(item.first);
     bool known = false;
@@ -331,6 +332,9 @@ PYBIND11_MODULE(_core, m) {
   py::list names;
   for (int k = 0; k < kStrategyCount; ++k) names.append(to_string(static_cast<Strategy>(k)));
   m.attr("STRATEGIES") = names;
+  py::dict suffixes;  // the tools' suffix letters (core/presets.hpp): letter -> what it switches in
+  for (const PresetSuffix& p : kPresetSuffixes) suffixes[py::str(std::string(1, p.letter))] = p.what;
+  m.attr("PRESET_SUFFIXES") = suffixes;
   py::list opts;
   for (const options::Info& o : options::kInfo) {
     py::dict d;
@@ -347,7 +351,7 @@ PYBIND11_MODULE(_core, m) {
 
 z: (m, 2) observations (range [m], bearing [rad]); R: (m, 2, 2) their noise [m^2, rad^2];
 h: (n, 2) predicted (range [m], bearing [rad]); C: (2n, 2n) H P H^T, candidate j at rows 2j, 2j+1;
-ids: (n,) feature ids >= 0. strategy: one of STRATEGIES ("+V" appended switches the verification in).
+ids: (n,) feature ids >= 0. strategy: one of STRATEGIES, optionally with the suffixes of PRESET_SUFFIXES ("JCBB+V", "PCJCBB+RL").
 Returns a dict: feature (m,) int32 (id, NEW_FEATURE or UNMATCHED), candidate (m,) (index or -1),
 d2 (m,), pairings, joint_d2, jointly_compatible, diagnostics (dict of counters).
 Raises GeojcbbError (.status: kNonFinite, kInvalidInput, kCapacityExceeded, kNotSymmetric,
@@ -356,7 +360,7 @@ Options (keywords; OPTIONS lists them; the association reads its own):
 )doc") + options_doc();
   static const std::string slam_doc =
       std::string(
-          "strategy: one of STRATEGIES (\"+V\" appended switches the verification in). Options "
+          "strategy: one of STRATEGIES, optionally with the suffixes of PRESET_SUFFIXES. Options "
           "(keywords; OPTIONS lists them):\n") +
       options_doc() + "Raises GeojcbbError (kInvalidInput for an option outside its range), TypeError.";
   m.def("associate", &associate_py, py::arg("z"), py::arg("R"), py::arg("h"), py::arg("C"), py::arg("ids"),

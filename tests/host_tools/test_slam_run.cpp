@@ -3,11 +3,15 @@
 // (eq. 15) and the run is reproducible from its seed.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/report.hpp"
+#include "geojcbb/node/slam_step.hpp"
 #include "geojcbb_host/slam_run.hpp"
 
 using namespace geojcbb;
@@ -109,4 +113,63 @@ TEST_CASE("report: a preset whose runs all failed is never scored, a run whose m
   CHECK(j[1]["f1"].get<double>() == doctest::Approx(2 * 9.0 / (2 * 9 + 1)));
   CHECK(j[1]["not_augmented"] == 7);
   CHECK(j[1]["runs_map_full"] == 1);
+}
+
+TEST_CASE("one orchestrator: the evaluation's run is node::SlamStep::step on the same inputs, bit for bit") {
+  // The in-process evaluation (run_inputs -> SlamSession) against a bare step fed the same inputs as
+  // the session feeds them (the nearest kEvalMaxObservations of each scan, by range): the pose after
+  // every input and the final map agree to the last bit, for presets that switch every stage in.
+  using EB = Bounds<kEvalMaxObservations, 128, 8, 200000, kEvalMaxLandmarks>;
+  struct Case {
+    const char* scene;
+    const char* preset;
+  };
+  for (const Case& c : {Case{"env1", "GEOJCBB"}, Case{"reloc_far", "PCJCBB+RL"}, Case{"loop", "PCJCBB+RLTHC"},
+                        Case{"lattice", "PCJCBB+LH"}}) {
+    CAPTURE(c.scene);
+    CAPTURE(c.preset);
+    const Scenario sc = load_scenario(std::string(GEOJCBB_SCENARIO_DIR) + "/" + c.scene + ".json");
+    RunOptions o;
+    select_methods({c.preset}, false).front().apply(o);
+    o.record_trace = true;
+    SimSource src(sc, 3, 700);
+    const RunResult r = run_inputs(src, o);
+    src.rewind();
+    auto step = std::make_unique<node::SlamStep<double, EB>>();
+    REQUIRE(step->configure(step_settings(o, src.sensor)) == Status::kOk);
+    REQUIRE(step->reset(src.x0, src.P0) == Status::kOk);
+    auto obs = std::make_unique<Observations<double, EB>>();
+    auto out = std::make_unique<node::StepResult<double, EB>>();
+    RunInput in;
+    std::size_t k = 0, differ = 0, first = 0;
+    while (src.next(in)) {
+      if (in.relocalise) {
+        REQUIRE(step->relocalise(step->slam().pose(), in.pose_cov) == Status::kOk);
+        step->lost();
+      } else if (in.scan) {
+        std::vector<SimObservation> scan = in.observations;
+        std::sort(scan.begin(), scan.end(), [](const auto& a, const auto& b) { return a.z.x() < b.z.x(); });
+        if (scan.size() > static_cast<std::size_t>(EB::kMaxObservations)) scan.resize(EB::kMaxObservations);
+        obs->clear();
+        for (const SimObservation& z : scan) REQUIRE(obs->push(z.z, z.R) == Status::kOk);
+        REQUIRE(step->step(*obs, *out) == Status::kOk);
+      } else if (in.increment) {
+        REQUIRE(step->predict(ekf::PoseIncrement<double>{in.dx_m, in.dy_m, in.dtheta_rad, in.increment_cov}) ==
+                Status::kOk);
+      } else {
+        REQUIRE(step->predict(ekf::Odometry<double>{in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps}) ==
+                Status::kOk);
+      }
+      REQUIRE(k < r.trace.size());
+      const Pose2<double> a = r.trace[k].pose, b = step->slam().pose();
+      const bool same = a.x == b.x && a.y == b.y && a.theta == b.theta;
+      if (!same && differ++ == 0) first = k;
+      ++k;
+    }
+    CAPTURE(first);
+    CHECK(differ == 0);
+    CHECK(k == r.trace.size());
+    CHECK(k > 500);
+    CHECK(r.landmarks == step->slam().landmarks());
+  }
 }

@@ -12,6 +12,7 @@ MAX_GROUPS: int  # 8
 MAX_JCBB_NODES: int  # 200000
 MAX_LANDMARKS: int  # 500
 STRATEGIES: List[str]  # ["ICNN", "JCBB", "KJCBB", "DFJCBB", "GEMJCBB", "GEOJCBB", "PCJCBB"]
+PRESET_SUFFIXES: Dict[str, str]  # the tools' suffix letters ("V", "R", "L", "T", "H", "C") -> what each switches in
 OPTIONS: List[Dict[str, str]]  # the option table (core/options.h): name, type, default, unit, meaning
 
 
@@ -118,7 +119,7 @@ def associate(z: npt.ArrayLike, R: npt.ArrayLike, h: npt.ArrayLike, C: npt.Array
               strategy: str = "GEOJCBB", **options: Any) -> AssociationResult:
     """z (m, 2) [m, rad], R (m, 2, 2) [m^2, rad^2], h (n, 2) [m, rad], C (2n, 2n), ids (n,) >= 0.
 
-    strategy: one of STRATEGIES, optionally with "+V". options: keywords of Options.
+    strategy: one of STRATEGIES, optionally with "+" and letters of PRESET_SUFFIXES ("PCJCBB+RL"). options: keywords of Options.
     Raises GeojcbbError with .status on bad input, TypeError on an unknown option.
     """
 
@@ -134,7 +135,7 @@ class Slam:
     """One EKF-SLAM step with data association (node::SlamStep<double, host bounds>)."""
 
     def __init__(self, strategy: str = "GEOJCBB", **options: Any) -> None:
-        """strategy: one of STRATEGIES, optionally with "+V". options: keywords of Options."""
+        """strategy: one of STRATEGIES, optionally with "+" and letters of PRESET_SUFFIXES ("PCJCBB+RL"). options: keywords of Options."""
     def reset(self, x0: npt.ArrayLike, P0: npt.ArrayLike) -> None:
         """x0 = (x [m], y [m], theta [rad]); P0 (3, 3) [m^2, rad^2]."""
     def predict(self, v_mps: float, w_radps: float, dt_s: float, sigma_v_mps: float, sigma_w_radps: float) -> None: ...

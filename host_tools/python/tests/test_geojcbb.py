@@ -180,3 +180,16 @@ def test_every_option_is_a_keyword_and_its_range_is_enforced():
     geojcbb.Slam("jcbb+v", miss_probability=0.001, static_gate_level=0.99, occlusion_rad=0.03)
     with pytest.raises(TypeError):
         geojcbb.Slam("JCBB", strategy="ICNN")
+
+
+def test_preset_suffixes_as_the_tools_read_them():
+    # One grammar (core/presets.hpp): every suffix the command-line tools accept, alone and together,
+    # in either case and any order; bad names refused with kInvalidInput.
+    assert set(geojcbb.PRESET_SUFFIXES) == set("VRLTHC")
+    for letter in geojcbb.PRESET_SUFFIXES:
+        geojcbb.Slam("PCJCBB+" + letter)
+        geojcbb.Slam("jcbb+" + letter.lower())
+    geojcbb.Slam("PCJCBB+RL")
+    geojcbb.Slam("PCJCBB+CHTLRV")
+    for bad in ["PCJCBB+", "PCJCBB+X", "PCJCBB+RR", "PCJCBB+R+L", "+RL", "PCJCBBX", "PCJCBB+VRLTHCV"]:
+        assert status_of(lambda: geojcbb.Slam(bad)) == "kInvalidInput", bad

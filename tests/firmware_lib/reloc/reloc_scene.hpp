@@ -81,6 +81,15 @@ std::unique_ptr<RelocRig<T, B>> make_known_map_rig(const std::vector<Eigen::Vect
   return rig;
 }
 
+/// An association override (node::AssociationOverride) that answers with one observation too many:
+/// step() must refuse it with nothing changed.
+template <typename T, class B>
+Status miscounted_association(void*, const Observations<T, B>& obs, const Prediction<T, B>&, const node::MapView<T, B>&,
+                              Association<T, B>& out) {
+  out.count = obs.count + 1;
+  return Status::kOk;
+}
+
 /// Distance from the step's position estimate to x's [m].
 template <typename T, class B>
 double position_error(const node::SlamStep<T, B>& s, const Pose2<double>& x) {

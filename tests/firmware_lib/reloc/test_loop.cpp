@@ -1,4 +1,4 @@
-// Loop closures scored, unique and confirmed (reloc/loop.hpp, node::SlamStep::check_loop): the set
+// Loop closures scored, unique and confirmed (reloc/loop.hpp, node::LoopCheck): the set
 // likelihood on a hand-computed case; a drifted filter's closure held while pending, committed on
 // the confirming scan and then right; a correction that changes between scans not committed; an
 // agreeing closure left alone; a closure's duplicate merged (ids stable, P definite); the filter's
@@ -132,7 +132,7 @@ TEST_CASE("loop: a closure the alignment agrees with is left as the association 
   for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
 }
 
-TEST_CASE("loop: check_loop allocates nothing, and refuses a count mismatch with nothing changed") {
+TEST_CASE("loop: the loop check allocates nothing, and a miscounted association changes nothing") {
   const auto map = test::reloc_map();
   const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
   auto rig = make_rig<double>(map, believed);
@@ -141,11 +141,9 @@ TEST_CASE("loop: check_loop allocates nothing, and refuses a count mismatch with
   CHECK(allocations_during([&] { st = rig->step.step(rig->obs, rig->out); }) == 0);
   REQUIRE(st == Status::kOk);
   REQUIRE(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
-  Association<double, B> assoc;
-  assoc.count = rig->obs.count + 1;
-  reloc::LoopStats<double> ls;
-  CHECK(rig->step.check_loop(rig->obs, assoc, ls) == Status::kInvalidInput);
-  // The pending closure survived the refused call: the next scan commits it.
+  const node::AssociationOverride<double, B> bad{test::miscounted_association<double, B>, nullptr};
+  CHECK(rig->step.step(rig->obs, rig->out, nullptr, &bad) == Status::kInvalidInput);
+  // The pending closure survived the refused scan: the next scan commits it.
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
   CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kCommitted);
 }

@@ -1,4 +1,4 @@
-// The hypothesis window (reloc/window.hpp, node::SlamStep::check_hypotheses): a shift-symmetric row
+// The hypothesis window (reloc/window.hpp, node::HypothesisWindow): a shift-symmetric row
 // of landmarks opens it; with the disputed observations held and no hypothesis leading it never
 // exceeds its bounds and ends having committed nothing; a second cluster in view resolves the row
 // and the pose is right after; bad input a Status with nothing changed; no allocation; float and
@@ -142,11 +142,11 @@ TEST_CASE("window: off, too many rivals refused, bad input a Status, no allocati
   CHECK(allocations_during([&] { st = rig->step.step(rig->obs, rig->out); }) == 0);
   REQUIRE(st == Status::kOk);
   REQUIRE(rig->out.window.verdict == reloc::WindowVerdict::kOpened);
-  Association<T, B> assoc;
-  assoc.count = rig->obs.count + 1;
-  reloc::WindowStats<T> ws;
-  CHECK(rig->step.check_hypotheses(rig->obs, assoc, ws) == Status::kInvalidInput);
-  // The open window survived the refused call.
+  const node::AssociationOverride<T, B> bad{test::miscounted_association<T, B>, nullptr};
+  const Pose2<T> before = rig->step.slam().pose();
+  CHECK(rig->step.step(rig->obs, rig->out, nullptr, &bad) == Status::kInvalidInput);
+  CHECK(rig->step.slam().pose().x == before.x);
+  // The open window survived the refused scan.
   CHECK(allocations_during([&] { st = rig->step.step(rig->obs, rig->out); }) == 0);
   REQUIRE(st == Status::kOk);
   CHECK(rig->out.window.verdict == reloc::WindowVerdict::kHeld);

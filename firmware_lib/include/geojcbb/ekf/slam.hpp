@@ -1,17 +1,25 @@
 // ekf: fixed-capacity EKF-SLAM, the filter: the state x, and the steps that move and correct it.
 //   state  x = [x_r, y_r, theta_r, l1x, l1y, l2x, l2y, ...]   (Layout: named blocks), n = dim()
 //   its covariance P in ekf/packed_covariance.hpp, each landmark's record in ekf/landmark_book.hpp
+// Every operation it offers:
+//   reset / relocalise: the map started at a pose; the pose re-set (the map kept, no correlation)
+//   relocalise_fitted:  the pose re-set at a fit to mapped landmarks, correlated with them     O(n p)
+//   inflate_pose:       Q added to the pose block (a committed closure), correlations kept     O(1)
 //   predict:        x_r <- f(x_r, u),  P_rr <- F P_rr F^T + G Q G^T,  P_rl <- F P_rl          O(n)
 //   predict_local:  candidates within r + d (eq. 5), their h_j and C = H P H^T (all cross terms) O(n^2)
 //   update:         the associated pairs fused sequentially, kUpdateBlockPairs pairs (rows of H
 //                   touching the pose and one landmark each) at a time, linearised once: per block
 //                   A = P H_b^T (O(n)), S_b = H_b A + R_b = L L^T, V = A L^-T, x <- x + V L^-1 nu_b,
 //                   P <- P - V V^T (PackedCovariance::downdate); equal to one batch update (design.md,
-//                   "Covariance engine"); scratch O(n)                                      O(n^2 p)
-//   augment:        a new landmark from the inverse model, with its cross covariances         O(n)
-//   review:         landmark bookkeeping (the book's rules, LandmarkPolicy, and the static gate
-//                   on x and P): a new landmark is tentative until it is paired again; one that
-//                   is expected in view and missed too often is removed, x and P compacted   O(n^2)
+//                   "Covariance engine"); scratch O(n); optionally linearised at another point
+//                   (`at`, an iterated step) and in rounds (`rounds`, a closure's most certain first) O(n^2 p)
+//   update_alone:   one pair that moves only its landmark (a Schmidt update, tentative landmarks) O(n)
+//   augment / add_known_landmark: a new landmark from the inverse model, or a known one       O(n)
+//   review, duplicate_d2, merge, evict: the map's upkeep (ekf/map_upkeep.hpp): landmark
+//                   bookkeeping (the book's rules, LandmarkPolicy, and the static gate on x and P):
+//                   a new landmark is tentative until it is paired again; one that is expected in
+//                   view and missed too often is removed, x and P compacted; a duplicate merged;
+//                   the least-seen landmark beyond r + d evicted from a full map            O(n^2)
 // First-estimates Jacobians (Huang, Mourikis, Roumeliotis, ICRA 2008; FilterOptions): the
 // measurement Jacobians use each landmark's first estimate, and the first prediction after an
 // update uses the pose before that update, so the filter gains no information along the directions
@@ -418,7 +426,7 @@ class Slam {
   ///
   /// `rounds` (nullptr: every pair): observation i's pair takes part only when rounds[i] ==
   /// this_round; a loop closure's pairs applied in rounds, most certain first, each round
-  /// linearised at the estimate the rounds before it left (node::SlamStep::commit).
+  /// linearised at the estimate the rounds before it left (node::SlamStep::step).
   [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws,
                               const Pose2<T>* at = nullptr, const std::uint8_t* rounds = nullptr, int this_round = 0) {
     if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
@@ -681,44 +689,17 @@ class Slam {
   /// @return kOk; kInvalidInput for a bad policy or view, or counts out of range. No state changes
   ///         unless kOk.
   /// Out of line: its keep[] (2 bytes a landmark) inlined into the caller's frame took
-  /// node::SlamStep::commit past 512 B at the large bounds.
+  /// node::SlamStep::step past 512 B at the large bounds.
   [[nodiscard, gnu::noinline]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
                                              const Visibility<T>& view, const LandmarkPolicy& policy,
-                                             ReviewStats& stats) {
-    if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
-        !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
-        !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {
-      return Status::kInvalidInput;
-    }
-    if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations) {
-      return Status::kInvalidInput;
-    }
-    count_evidence(pred, assoc, view, policy, stats);
-    std::int16_t keep[B::kMaxLandmarks];
-    const int kept = book_.choose_kept(policy, keep, stats);
-    if (kept == landmarks()) return Status::kOk;
-    move_kept(keep, kept);
-    book_.retain(keep, kept);
-    return Status::kOk;
-  }
+                                             ReviewStats& stats);
 
   /// How far apart landmarks a and b (indices) are, in their own uncertainty: d = l_a - l_b, its
   /// covariance P_aa + P_bb - P_ab - P_ba (their correlation counts: two estimates of one landmark
   /// made from one drifting pose are close in this metric even when far in metres).
   /// @return d^T S^-1 d; +inf for an index out of range, a == b, or S not positive definite. Reads
   ///         only.  O(1)
-  T duplicate_d2(int a, int b) const {
-    if (a < 0 || b < 0 || a >= landmarks() || b >= landmarks() || a == b) return std::numeric_limits<T>::infinity();
-    const int la = Layout::landmark(a), lb = Layout::landmark(b);
-    const T s00 = cov(la, la) + cov(lb, lb) - T(2) * cov(la, lb);
-    const T s01 = cov(la, la + 1) + cov(lb, lb + 1) - cov(la, lb + 1) - cov(la + 1, lb);
-    const T s11 = cov(la + 1, la + 1) + cov(lb + 1, lb + 1) - T(2) * cov(la + 1, lb + 1);
-    const T det = s00 * s11 - s01 * s01;
-    if (!(s00 > T(0)) || !(det > T(0)) || !std::isfinite(det)) return std::numeric_limits<T>::infinity();
-    const T dx = x_[la] - x_[lb], dy = x_[la + 1] - x_[lb + 1];
-    const T d2 = (s11 * dx * dx - T(2) * s01 * dx * dy + s00 * dy * dy) / det;
-    return std::isfinite(d2) ? d2 : std::numeric_limits<T>::infinity();
-  }
+  T duplicate_d2(int a, int b) const;
 
   /// Landmarks keep and drop (indices) are one landmark mapped twice (a duplicate a loop closure
   /// reveals): the constraint l_keep - l_drop = 0 is fused as an update (H = [0 .. I .. -I ..],
@@ -727,134 +708,32 @@ class Slam {
   /// @return kOk; kInvalidInput for an index out of range or keep == drop; kNotPositiveDefinite when
   ///         S, or a pose or landmark block after the downdate, is not; kNonFinite when the mean
   ///         would overflow. No state changes unless kOk.  O(n^2)
-  [[nodiscard]] Status merge(int keep, int drop, SlamWorkspace<T, B>& ws) {
-    if (keep < 0 || drop < 0 || keep >= landmarks() || drop >= landmarks() || keep == drop) {
-      return Status::kInvalidInput;
-    }
-    const int n = dim();
-    constexpr int K = kUpdateBlockCols;
-    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
-    const int lk = Layout::landmark(keep), ld = Layout::landmark(drop);
-    for (int r = 0; r < n; ++r) {  // A = P H^T, two columns;  <= kMaxState
-      V(r, 0) = cov(r, lk) - cov(r, ld);
-      V(r, 1) = cov(r, lk + 1) - cov(r, ld + 1);
-      for (int c = 2; c < K; ++c) V(r, c) = T(0);  // <= K
-    }
-    // S = H A + R = L L^T (2x2), then V <- A L^-T.
-    const T s00 = V(lk, 0) - V(ld, 0) + kMergeNoise_m2, s10 = V(lk + 1, 0) - V(ld + 1, 0);
-    const T s11 = V(lk + 1, 1) - V(ld + 1, 1) + kMergeNoise_m2;
-    if (!(s00 > T(0)) || !std::isfinite(s00)) return Status::kNotPositiveDefinite;
-    const T l00 = std::sqrt(s00), l10 = s10 / l00, d11 = s11 - l10 * l10;
-    if (!(d11 > T(0)) || !std::isfinite(d11)) return Status::kNotPositiveDefinite;
-    const T l11 = std::sqrt(d11);
-    for (int r = 0; r < n; ++r) {  // <= kMaxState
-      V(r, 0) = V(r, 0) / l00;
-      V(r, 1) = (V(r, 1) - l10 * V(r, 0)) / l11;
-    }
-    if (!downdate_keeps_blocks_definite(n, ws)) return Status::kNotPositiveDefinite;
-    // The innovation 0 - (l_keep - l_drop), whitened: w = L^-1 nu.
-    const T w0 = -(x_[lk] - x_[ld]) / l00;
-    const T w1 = (-(x_[lk + 1] - x_[ld + 1]) - l10 * w0) / l11;
-    for (int r = 0; r < n; ++r) {  // <= kMaxState
-      if (!std::isfinite(x_[r] + V(r, 0) * w0 + V(r, 1) * w1)) return Status::kNonFinite;
-    }
-    if (!updated_) {  // the pose the next prediction linearises at (FEJ), as update() records it
-      prior_[0] = x_[0];
-      prior_[1] = x_[1];
-      updated_ = true;
-    }
-    for (int r = 0; r < n; ++r) x_[r] += V(r, 0) * w0 + V(r, 1) * w1;  // <= kMaxState
-    x_[2] = wrap_angle(x_[2]);
-    P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
-    book_.absorb(keep, drop);
-    remove(drop);
-    return Status::kOk;
-  }
+  [[nodiscard]] Status merge(int keep, int drop, SlamWorkspace<T, B>& ws);
 
   /// Makes room in a full map: removes the landmark with the fewest hits among those farther than
   /// radius_m from the robot (beyond the local region, so not in this scan's prediction), the
   /// farthest of equals; every other landmark keeps its id.  O(n^2)
   /// @param[out] evicted  its id (-1 when none)
   /// @return kOk; kCapacityExceeded when no landmark is beyond radius_m (nothing changed).
-  [[nodiscard]] Status evict(T radius_m, FeatureId& evicted) {
-    evicted = -1;
-    int best = -1;
-    T best_d = T(0);
-    const Vec2<T> r(x_[0], x_[1]);
-    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
-      const T d = (landmark(j) - r).norm();
-      if (!(d > radius_m)) continue;
-      if (best < 0 || hits(j) < hits(best) || (hits(j) == hits(best) && d > best_d)) {
-        best = j;
-        best_d = d;
-      }
-    }
-    if (best < 0) return Status::kCapacityExceeded;
-    evicted = id(best);
-    remove(best);
-    return Status::kOk;
-  }
+  [[nodiscard]] Status evict(T radius_m, FeatureId& evicted);
 
  private:
   /// Removes landmark j (x, P and its record; the others keep their ids and order). Out of line:
   /// its keep[] (2 bytes a landmark) stays out of the caller's frame.  O(n^2)
-  [[gnu::noinline]] void remove(int j) {
-    std::int16_t keep[B::kMaxLandmarks];
-    int kept = 0;
-    for (int k = 0; k < landmarks(); ++k) {  // <= kMaxLandmarks
-      if (k != j) keep[kept++] = static_cast<std::int16_t>(k);
-    }
-    move_kept(keep, kept);
-    book_.retain(keep, kept);
-  }
+  [[gnu::noinline]] void remove(int j);
   /// The static gate (LandmarkPolicy::static_gate_d2) on landmark j: a static landmark's estimate
   /// only refines its first one, so l - l0 has covariance P0 - P (the information gained), floored
   /// by kStaticFloor_m2 against a near-singular gain. Whether its d2 exceeds gate_d2.
-  bool moved(int j, T gate_d2) const {
-    const LandmarkRecord<T>& r = book_[j];
-    const int l = Layout::landmark(j);
-    const T a0 = r.P0[0] - cov(l, l) + kStaticFloor_m2, b0 = r.P0[1] - cov(l, l + 1),
-            c0 = r.P0[2] - cov(l + 1, l + 1) + kStaticFloor_m2;
-    const T det = a0 * c0 - b0 * b0;
-    const T dx = x_[l] - r.l0[0], dy = x_[l + 1] - r.l0[1];
-    const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
-    return det > T(0) && d2 > gate_d2;
-  }
+  bool moved(int j, T gate_d2) const;
   /// review()'s first half: every landmark of pred gains a hit, a miss or nothing (out of view),
   /// and the static gate marks the ones that moved. Out of line so review()'s frame (which holds
   /// keep) stays within the 512-byte budget at the large bounds.
   [[gnu::noinline]] void count_evidence(const Prediction<T, B>& pred, const Association<T, B>& assoc,
-                                        const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats) {
-    stats = ReviewStats{};
-    book_.start_review();
-    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
-      const int j = index_of(pred.id[a]);
-      if (j < 0) continue;  // not in this map
-      bool paired = false;
-      for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
-      const Vec2<T>& h = pred.h[a];
-      bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
-      for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
-        in_view =
-            !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
-      }
-      stats.expected += in_view;
-      stats.paired += paired;
-      book_.count(j, in_view, paired, policy);
-      if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
-    }
-  }
+                                        const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats);
   /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Every
   /// source index is at or after its destination, so nothing is overwritten before it is read.
   /// Out of line so review()'s frame (which holds keep) stays within the 512-byte budget.
-  [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
-    P_.template keep_pairs<Layout::kPoseSize>(keep, kept);
-    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
-      const int l = Layout::landmark(k), o = Layout::landmark(keep[k]);
-      x_[l] = x_[o];
-      x_[l + 1] = x_[o + 1];
-    }
-  }
+  [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept);
   /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
   /// record. @return its id
   FeatureId add_landmark(const Vec2<T>& l) {
@@ -910,3 +789,6 @@ class Slam {
 };
 
 }  // namespace geojcbb::ekf
+
+// The map's upkeep (review, duplicate_d2, merge, evict, remove, moved), defined in its own file.
+#include "geojcbb/ekf/map_upkeep.hpp"  // IWYU pragma: export

@@ -133,6 +133,14 @@ struct AlignWorkspace {
   }
 };
 
+/// Poses farther apart than opt.distinct_m, or turned by more than opt.distinct_rad, are distinct.
+template <typename T>
+bool distinct(const Pose2<T>& a, const Pose2<T>& b, const AlignOptions<T>& opt) {
+  const T dx = a.x - b.x, dy = a.y - b.y;
+  return dx * dx + dy * dy > opt.distinct_m * opt.distinct_m ||
+         std::abs(wrap_angle(a.theta - b.theta)) > opt.distinct_rad;
+}
+
 namespace align_detail {
 
 template <typename T>
@@ -204,13 +212,6 @@ bool better(const Candidate<T>& a, const Candidate<T>& b) {
   return a.inliers > b.inliers || (a.inliers == b.inliers && a.cost < b.cost);
 }
 
-template <typename T>
-bool distinct(const Pose2<T>& a, const Pose2<T>& b, const AlignOptions<T>& opt) {
-  const T dx = a.x - b.x, dy = a.y - b.y;
-  return dx * dx + dy * dy > opt.distinct_m * opt.distinct_m ||
-         std::abs(wrap_angle(a.theta - b.theta)) > opt.distinct_rad;
-}
-
 /// Keeps the kTopPoses best distinct poses, best first: a pose close to a kept one replaces it
 /// when better, else it is dropped. Bound: kTopPoses.
 template <typename T>
@@ -229,30 +230,6 @@ void offer(std::array<Candidate<T>, kTopPoses>& top, int& kept, const Candidate<
   for (int q = last; q > at; --q) top[q] = top[q - 1];  // <= kTopPoses
   top[at] = c;
   if (kept < kTopPoses) ++kept;
-}
-
-/// Exclusive inliers of pose x: each observation its nearest landmark in the gate; a landmark
-/// taken twice keeps the observation with the smaller d2. Bound: m nearest() calls + m^2.
-template <typename T, class B>
-int exclusive_inliers(AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate_d2) {
-  const Mat2<T> Rot = rotation(x.theta);
-  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    ws.pick[i] =
-        ws.skip[i] ? std::int16_t(-1) : static_cast<std::int16_t>(nearest(ws, i, x, Rot, gate_d2, ws.pick_d2[i]));
-  }
-  int count = 0;
-  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    if (ws.pick[i] < 0) continue;
-    for (int k = 0; k < m; ++k) {  // <= kMaxObservations
-      if (k == i || ws.pick[k] != ws.pick[i]) continue;
-      if (ws.pick_d2[k] < ws.pick_d2[i] || (ws.pick_d2[k] == ws.pick_d2[i] && k < i)) {
-        ws.pick[i] = -1;
-        break;
-      }
-    }
-    count += ws.pick[i] >= 0;
-  }
-  return count;
 }
 
 /// Weighted 2-D Procrustes (rotation only) of the picked pairs: the pose minimising
@@ -345,6 +322,30 @@ template <typename T, class B>
 }
 
 }  // namespace align_detail
+
+/// Exclusive inliers of pose x: each observation its nearest landmark in the gate; a landmark
+/// taken twice keeps the observation with the smaller d2. Bound: m nearest() calls + m^2.
+template <typename T, class B>
+int exclusive_inliers(AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, T gate_d2) {
+  const Mat2<T> Rot = align_detail::rotation(x.theta);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    ws.pick[i] = ws.skip[i] ? std::int16_t(-1)
+                            : static_cast<std::int16_t>(align_detail::nearest(ws, i, x, Rot, gate_d2, ws.pick_d2[i]));
+  }
+  int count = 0;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] < 0) continue;
+    for (int k = 0; k < m; ++k) {  // <= kMaxObservations
+      if (k == i || ws.pick[k] != ws.pick[i]) continue;
+      if (ws.pick_d2[k] < ws.pick_d2[i] || (ws.pick_d2[k] == ws.pick_d2[i] && k < i)) {
+        ws.pick[i] = -1;
+        break;
+      }
+    }
+    count += ws.pick[i] >= 0;
+  }
+  return count;
+}
 
 /// The accepted pose's sensitivity to the landmarks it was fitted to, for a relocalisation that
 /// keeps the pose's correlation with the map (ekf::Slam::relocalise_fitted): over the pairs in

@@ -13,7 +13,7 @@
 // loop_confirm_scans scans in a row; then it is committed: the pose block inflated by the correction,
 // the alignment's pairs replace the association's, and the update linearised at the alignment's
 // pose (ekf::Slam::update's `at`, an iterated EKF step), so the correlations carry the correction to
-// the landmarks mapped during the drift. node::SlamStep::check_loop runs it, reading its options
+// the landmarks mapped during the drift. node::LoopCheck (node/stages/loop_check.hpp) runs it, reading its options
 // from the step's settings; docs/relocalisation.md ("Loop closures").
 // Bounds: one align() call; two fits (kFitSteps Gauss-Newton steps) and two scores, each
 // O(m + n); the association's rewrite O(m n).

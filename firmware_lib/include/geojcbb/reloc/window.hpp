@@ -7,7 +7,7 @@
 // log p_D + log N(nu; 0, S), S = Jx P Jx^T + Jl P_l Jl^T + R, so the pose prior is in the score:
 //   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)
 //   + (landmarks in view at the pose, not paired) log(1 - p_D) + (unpaired observations) log(density)
-// node::SlamStep::check_hypotheses runs it (docs/hypotheses.md): a scan whose seeds (the
+// node::HypothesisWindow (node/stages/hypothesis_window.hpp) runs it (docs/hypotheses.md): a scan whose seeds (the
 // association's pairs, and one seed per compatible landmark of up to kMaxAnchors ambiguous
 // observations) include two conflicting ones within the margin, or a seed that conflicts with the
 // association's and beats it, opens the window with at most kMaxHypotheses conflicting seeds (the
@@ -70,8 +70,6 @@ struct WindowStats {
   int regrouped = 0;   ///< observations cluster_first paired anew (before the window's part)
 };
 
-namespace window_detail {
-
 /// Range-bearing innovation of observation i against frozen landmark j at (x, P): nu, S, Jx.
 /// @return d2 = nu^T S^-1 nu; +inf when S is not positive definite or the landmark is at the
 ///         sensor (map.mount on the robot at x).
@@ -89,6 +87,8 @@ T pair_d2(const Observations<T, B>& obs, int i, const AlignWorkspace<T, B>& map,
   if (!(det > T(0)) || !(S(0, 0) > T(0))) return std::numeric_limits<T>::infinity();
   return (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
 }
+
+namespace window_detail {
 
 /// The EKF update of the pose filter with one pair; @return its log-likelihood term
 /// log p_D - d2 / 2 - log|2 pi S| / 2.

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "geojcbb/core/presets.hpp"
 #include "geojcbb/core/settings.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
@@ -72,7 +73,8 @@ struct MapLandmark {
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
 /// the relocaliser, L the loop-closure check, T tentative landmarks isolated, H the hypothesis
-/// window (kPresetRivals kept beside the best), C clusters paired first. kRobustPreset names the preset with V, R and L.
+/// window (kPresetRivals kept beside the best), C clusters paired first: the grammar and its table
+/// are core/presets.hpp's, read alike by every tool and by Python. kRobustPreset names the preset with V, R and L.
 struct Method {
   Strategy strategy = Strategy::kGeojcbb;
   bool oracle = false;
@@ -82,30 +84,28 @@ struct Method {
   bool tentative = false;   ///< StepSettings::tentative_isolated switched in
   bool window = false;      ///< StepSettings::hypothesis_rivals (kPresetRivals) switched in
   bool clusters = false;    ///< StepSettings::cluster_first switched in
+  /// The preset's pieces as the grammar's table has them (core/presets.hpp).
+  Preset preset() const {
+    Preset p;
+    p.strategy = strategy;
+    const bool on[] = {verify, relocalise, loop_check, tentative, window, clusters};  // kPresetSuffixes' order
+    static_assert(sizeof(on) / sizeof(on[0]) == kPresetSuffixCount, "a Method field per suffix");
+    for (int k = 0; k < kPresetSuffixCount; ++k) p.suffixes = static_cast<std::uint8_t>(p.suffixes | (on[k] << k));
+    return p;
+  }
+  static Method from(const Preset& p) {
+    return {p.strategy, false, p.has('V'), p.has('R'), p.has('L'), p.has('T'), p.has('H'), p.has('C')};
+  }
   std::string name() const {
     if (oracle) return "TRUTH";
-    std::string n = to_string(strategy);
-    std::string suffix;
-    if (verify && strategy != Strategy::kPcjcbb) suffix += 'V';  // PCJCBB verifies anyway
-    if (relocalise) suffix += 'R';
-    if (loop_check) suffix += 'L';
-    if (tentative) suffix += 'T';
-    if (window) suffix += 'H';
-    if (clusters) suffix += 'C';
-    return suffix.empty() ? n : n + "+" + suffix;
+    char buf[kMaxPresetName + 1];
+    preset_name(preset(), buf);
+    return buf;
   }
   void apply(RunOptions& o) const {
-    o.step.strategy = strategy;
+    apply_preset(preset(), o.step);
     o.oracle = oracle;
-    o.step.verify = o.step.verify || verify;
-    o.step.relocalise = o.step.relocalise || relocalise;
-    o.step.loop_check = o.step.loop_check || loop_check;
-    o.step.tentative_isolated = o.step.tentative_isolated || tentative;
-    if (window && o.step.hypothesis_rivals == 0) o.step.hypothesis_rivals = kPresetRivals;
-    o.step.cluster_first = o.step.cluster_first || clusters;
   }
-  /// The rivals the suffix H keeps beside the best (unless --hypothesis-rivals sets them).
-  static constexpr int kPresetRivals = 2;
 };
 
 /// The preset with every piece of the lost-and-found work: PCJCBB (pose-free verification), the

@@ -1,0 +1,176 @@
+// ekf: the map's upkeep, the operations of ekf::Slam that decide which landmarks stay (declared and
+// documented in ekf/slam.hpp, defined here):
+//   review         a scan's evidence counted (hits, misses, the static gate) and the landmarks the
+//                  policy rejects removed (count_evidence, LandmarkBook::choose_kept, move_kept)
+//   duplicate_d2   how far apart two landmarks are in their own uncertainty
+//   merge          a duplicate fused into the landmark it copies, then removed
+//   evict          the least-seen landmark beyond r + d removed to make room
+//   remove, moved  one landmark removed; the static gate on one landmark
+// Definitions are `inline` where the in-class ones were implicitly so (the `gnu::noinline` ones
+// are not), so the compiler inlines as before the split.
+// Bounds: O(n^2) per removal (the covariance compacted), O(n_c) evidence per scan.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "geojcbb/ekf/slam.hpp"
+
+namespace geojcbb::ekf {
+
+template <typename T, class B>
+Status Slam<T, B>::review(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
+                          const LandmarkPolicy& policy, ReviewStats& stats) {
+  if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
+      !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
+      !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {
+    return Status::kInvalidInput;
+  }
+  if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations) {
+    return Status::kInvalidInput;
+  }
+  count_evidence(pred, assoc, view, policy, stats);
+  std::int16_t keep[B::kMaxLandmarks];
+  const int kept = book_.choose_kept(policy, keep, stats);
+  if (kept == landmarks()) return Status::kOk;
+  move_kept(keep, kept);
+  book_.retain(keep, kept);
+  return Status::kOk;
+}
+
+template <typename T, class B>
+inline T Slam<T, B>::duplicate_d2(int a, int b) const {
+  if (a < 0 || b < 0 || a >= landmarks() || b >= landmarks() || a == b) return std::numeric_limits<T>::infinity();
+  const int la = Layout::landmark(a), lb = Layout::landmark(b);
+  const T s00 = cov(la, la) + cov(lb, lb) - T(2) * cov(la, lb);
+  const T s01 = cov(la, la + 1) + cov(lb, lb + 1) - cov(la, lb + 1) - cov(la + 1, lb);
+  const T s11 = cov(la + 1, la + 1) + cov(lb + 1, lb + 1) - T(2) * cov(la + 1, lb + 1);
+  const T det = s00 * s11 - s01 * s01;
+  if (!(s00 > T(0)) || !(det > T(0)) || !std::isfinite(det)) return std::numeric_limits<T>::infinity();
+  const T dx = x_[la] - x_[lb], dy = x_[la + 1] - x_[lb + 1];
+  const T d2 = (s11 * dx * dx - T(2) * s01 * dx * dy + s00 * dy * dy) / det;
+  return std::isfinite(d2) ? d2 : std::numeric_limits<T>::infinity();
+}
+
+template <typename T, class B>
+inline Status Slam<T, B>::merge(int keep, int drop, SlamWorkspace<T, B>& ws) {
+  if (keep < 0 || drop < 0 || keep >= landmarks() || drop >= landmarks() || keep == drop) {
+    return Status::kInvalidInput;
+  }
+  const int n = dim();
+  constexpr int K = kUpdateBlockCols;
+  auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
+  const int lk = Layout::landmark(keep), ld = Layout::landmark(drop);
+  for (int r = 0; r < n; ++r) {  // A = P H^T, two columns;  <= kMaxState
+    V(r, 0) = cov(r, lk) - cov(r, ld);
+    V(r, 1) = cov(r, lk + 1) - cov(r, ld + 1);
+    for (int c = 2; c < K; ++c) V(r, c) = T(0);  // <= K
+  }
+  // S = H A + R = L L^T (2x2), then V <- A L^-T.
+  const T s00 = V(lk, 0) - V(ld, 0) + kMergeNoise_m2, s10 = V(lk + 1, 0) - V(ld + 1, 0);
+  const T s11 = V(lk + 1, 1) - V(ld + 1, 1) + kMergeNoise_m2;
+  if (!(s00 > T(0)) || !std::isfinite(s00)) return Status::kNotPositiveDefinite;
+  const T l00 = std::sqrt(s00), l10 = s10 / l00, d11 = s11 - l10 * l10;
+  if (!(d11 > T(0)) || !std::isfinite(d11)) return Status::kNotPositiveDefinite;
+  const T l11 = std::sqrt(d11);
+  for (int r = 0; r < n; ++r) {  // <= kMaxState
+    V(r, 0) = V(r, 0) / l00;
+    V(r, 1) = (V(r, 1) - l10 * V(r, 0)) / l11;
+  }
+  if (!downdate_keeps_blocks_definite(n, ws)) return Status::kNotPositiveDefinite;
+  // The innovation 0 - (l_keep - l_drop), whitened: w = L^-1 nu.
+  const T w0 = -(x_[lk] - x_[ld]) / l00;
+  const T w1 = (-(x_[lk + 1] - x_[ld + 1]) - l10 * w0) / l11;
+  for (int r = 0; r < n; ++r) {  // <= kMaxState
+    if (!std::isfinite(x_[r] + V(r, 0) * w0 + V(r, 1) * w1)) return Status::kNonFinite;
+  }
+  if (!updated_) {  // the pose the next prediction linearises at (FEJ), as update() records it
+    prior_[0] = x_[0];
+    prior_[1] = x_[1];
+    updated_ = true;
+  }
+  for (int r = 0; r < n; ++r) x_[r] += V(r, 0) * w0 + V(r, 1) * w1;  // <= kMaxState
+  x_[2] = wrap_angle(x_[2]);
+  P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
+  book_.absorb(keep, drop);
+  remove(drop);
+  return Status::kOk;
+}
+
+template <typename T, class B>
+inline Status Slam<T, B>::evict(T radius_m, FeatureId& evicted) {
+  evicted = -1;
+  int best = -1;
+  T best_d = T(0);
+  const Vec2<T> r(x_[0], x_[1]);
+  for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
+    const T d = (landmark(j) - r).norm();
+    if (!(d > radius_m)) continue;
+    if (best < 0 || hits(j) < hits(best) || (hits(j) == hits(best) && d > best_d)) {
+      best = j;
+      best_d = d;
+    }
+  }
+  if (best < 0) return Status::kCapacityExceeded;
+  evicted = id(best);
+  remove(best);
+  return Status::kOk;
+}
+
+template <typename T, class B>
+void Slam<T, B>::remove(int j) {
+  std::int16_t keep[B::kMaxLandmarks];
+  int kept = 0;
+  for (int k = 0; k < landmarks(); ++k) {  // <= kMaxLandmarks
+    if (k != j) keep[kept++] = static_cast<std::int16_t>(k);
+  }
+  move_kept(keep, kept);
+  book_.retain(keep, kept);
+}
+
+template <typename T, class B>
+inline bool Slam<T, B>::moved(int j, T gate_d2) const {
+  const LandmarkRecord<T>& r = book_[j];
+  const int l = Layout::landmark(j);
+  const T a0 = r.P0[0] - cov(l, l) + kStaticFloor_m2, b0 = r.P0[1] - cov(l, l + 1),
+          c0 = r.P0[2] - cov(l + 1, l + 1) + kStaticFloor_m2;
+  const T det = a0 * c0 - b0 * b0;
+  const T dx = x_[l] - r.l0[0], dy = x_[l + 1] - r.l0[1];
+  const T d2 = (c0 * dx * dx - T(2) * b0 * dx * dy + a0 * dy * dy) / det;
+  return det > T(0) && d2 > gate_d2;
+}
+
+template <typename T, class B>
+void Slam<T, B>::count_evidence(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
+                                const LandmarkPolicy& policy, ReviewStats& stats) {
+  stats = ReviewStats{};
+  book_.start_review();
+  for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+    const int j = index_of(pred.id[a]);
+    if (j < 0) continue;  // not in this map
+    bool paired = false;
+    for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
+    const Vec2<T>& h = pred.h[a];
+    bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+    for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
+      in_view = !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
+    }
+    stats.expected += in_view;
+    stats.paired += paired;
+    book_.count(j, in_view, paired, policy);
+    if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
+  }
+}
+
+template <typename T, class B>
+void Slam<T, B>::move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
+  P_.template keep_pairs<Layout::kPoseSize>(keep, kept);
+  for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
+    const int l = Layout::landmark(k), o = Layout::landmark(keep[k]);
+    x_[l] = x_[o];
+    x_[l + 1] = x_[o + 1];
+  }
+}
+
+}  // namespace geojcbb::ekf

@@ -1,0 +1,183 @@
+// node/stages: the loop check (StepSettings::loop_check, reloc/loop.hpp). Its state across scans: the
+// pending closure (wins in a row and its correction) and the agreeing checks in a row.
+//   run()  after the association, while tracking: a scan whose local region holds old landmarks
+//          (supported, unseen for loop_age reviews) has its closure checked against a pose-free
+//          alignment over them; the association is left as it is, has its disputed pairs held, or
+//          gets the alignment's pairs with a Closure for the step to commit
+//   closure_rounds()  a committed closure's pairs ranked for the update's rounds (any stage's closure)
+// Bounds: one align() call, two fits and two scores per checked scan; the rewrite O(m n).
+// docs/relocalisation.md ("Loop closures").
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "geojcbb/core/association_config.hpp"
+#include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/reloc/loop.hpp"
+
+namespace geojcbb::node {
+
+template <typename T, class B>
+class LoopCheck {
+ public:
+  void reset() { state_ = reloc::LoopState<T>{}; }
+  /// A closure is pending: the window keeps out of the way (SlamStep passes it on).
+  bool pending() const { return state_.pending > 0; }
+
+  /// One tracked scan (the step calls it with loop_check on and the robot tracking).
+  /// @return kOk; kInvalidInput for a count mismatch; the statuses of AlignWorkspace::push_landmark
+  ///         and reloc::align (then `assoc` unchanged).
+  [[nodiscard]] Status run(const AssociationConfig<T, B>& cfg, const reloc::AlignOptions<T>& opt,
+                           const Observations<T, B>& obs, const Prediction<T, B>& pred, const MapView<T, B>& map,
+                           AlignScratch<T, B>& scratch, Association<T, B>& assoc, reloc::LoopStats<T>& ls,
+                           Closure<T>& close) {
+    if (assoc.count != obs.count) return Status::kInvalidInput;
+    ls = reloc::LoopStats<T>{};
+    close.commit = false;
+    auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.supported(k); };
+    int in_region = 0;
+    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+      const int k = map.slot_of(pred.id[a]);
+      in_region += k >= 0 && old(k);
+    }
+    if (in_region == 0) {  // away from old ground: the next visit is checked afresh
+      state_ = reloc::LoopState<T>{};
+      return Status::kOk;
+    }
+    if (state_.pending == 0 && state_.agreed >= reloc::kLoopSettleScans) return Status::kOk;
+    const Pose2<T> xp = map.pose();
+    const T reach = cfg.local_radius_m + cfg.loop_search_m;
+    const reloc::SetModel<T> model{cfg.loop_detection_probability, cfg.loop_unexplained_density};
+    reloc::AlignWorkspace<T, B>& ws = scratch.ws;
+    scratch.clear();
+    for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
+      if (!old(k) || (map.mean(k) - Vec2<T>(xp.x, xp.y)).squaredNorm() > reach * reach) continue;
+      const Status st = scratch.push(map, k);
+      if (st != Status::kOk) return st;
+    }
+    // An observation the association paired with a landmark that is not old is explained where
+    // the filter is: no closure's, so left out of both.
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int k = map.slot_of(assoc.feature[i]);
+      ws.skip[static_cast<std::size_t>(i)] = k >= 0 && !old(k);
+    }
+    Status st = reloc::align(obs, opt, ws, scratch.result);
+    if (st != Status::kOk) return st;
+    const reloc::AlignResult<T, B>& a = scratch.result;
+    const int m = obs.count;
+    ls.old_landmarks = ws.n;
+    ls.inliers = a.inliers;
+    ls.rival_inliers = a.rival_inliers;
+    // The association's closure: its pairs with old landmarks, as sorted map indices.
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      ws.pick[i] = -1;
+      const int k = map.slot_of(assoc.feature[i]);
+      if (k < 0 || !old(k)) continue;
+      for (int s = 0; s < ws.n; ++s) {  // <= kMaxLandmarks
+        if (scratch.slot_sorted(s) == k) ws.pick[i] = static_cast<std::int16_t>(s);
+      }
+    }
+    // Consistent with the pose as it is, without the pose's (perhaps overconfident) covariance.
+    const bool fits_as_is = reloc::max_pair_d2(ws, m, xp) <= opt.gate_d2;
+    Pose2<T> x_assoc = xp;
+    reloc::fit_picked(ws, m, x_assoc);
+    ls.ll_association = reloc::set_log_likelihood(ws, m, x_assoc, opt, model);
+    ls.association_pose = x_assoc;
+    const T jump2 = (a.pose.x - xp.x) * (a.pose.x - xp.x) + (a.pose.y - xp.y) * (a.pose.y - xp.y);
+    const bool alternative = a.accepted && jump2 <= cfg.loop_search_m * cfg.loop_search_m &&
+                             std::abs(wrap_angle(a.pose.theta - xp.theta)) <= cfg.loop_search_rad;
+    const Pose2<T> x_align = a.pose;
+    if (alternative) {
+      reloc::exclusive_inliers(ws, m, x_align, opt.gate_d2);  // its pairs in pick
+      ls.ll_alignment = reloc::set_log_likelihood(ws, m, x_align, opt, model);
+      ls.alignment_pose = x_align;
+    } else {
+      for (int i = 0; i < m; ++i) ws.pick[i] = -1;  // <= kMaxObservations
+    }
+    if (alternative && !reloc::distinct(x_align, x_assoc, opt)) {
+      ls.verdict = reloc::LoopVerdict::kAgreed;
+      state_.pending = 0;
+      state_.agreed = std::min(state_.agreed + 1, reloc::kLoopSettleScans);
+      return Status::kOk;
+    }
+    if (!alternative && fits_as_is) {
+      ls.verdict = reloc::LoopVerdict::kConsistent;
+      state_.pending = 0;
+      return Status::kOk;
+    }
+    state_.agreed = 0;
+    bool commit_now = false;
+    if (!alternative || !(ls.ll_alignment >= ls.ll_association + cfg.loop_margin_nats)) {
+      // No closure is unique and best: the association's is held too.
+      ls.verdict = alternative ? reloc::LoopVerdict::kKept : reloc::LoopVerdict::kNoAlternative;
+      state_.pending = 0;
+    } else {
+      const bool same = state_.pending > 0 && !reloc::distinct(reloc::corrected(state_.correction, xp), x_align, opt);
+      state_.pending = same ? state_.pending + 1 : 1;
+      state_.correction = reloc::correction_between(xp, x_align);
+      commit_now = state_.pending >= cfg.loop_confirm_scans;
+      ls.verdict = commit_now ? reloc::LoopVerdict::kCommitted : reloc::LoopVerdict::kPending;
+    }
+    // The disputed observations (paired with an old landmark by either closure): held, or paired
+    // as the committed closure says.
+    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+      const int k = map.slot_of(assoc.feature[i]);
+      const bool disputed = ws.pick[i] >= 0 || (k >= 0 && old(k));
+      if (!disputed) continue;
+      ++ls.held;
+      if (commit_now && ws.pick[i] >= 0) {
+        pair(assoc, pred, i, map.id(scratch.slot_sorted(ws.pick[i])), ws.pick_d2[i]);
+      } else {
+        unpair(assoc, i);
+      }
+    }
+    if (!commit_now) return Status::kOk;
+    const T dx = x_align.x - xp.x, dy = x_align.y - xp.y, dth = wrap_angle(x_align.theta - xp.theta);
+    Mat3<T> Q = a.cov;
+    Q(0, 0) += dx * dx;
+    Q(1, 1) += dy * dy;
+    Q(2, 2) += dth * dth;
+    close.Q = cfg.loop_inflation * Q;
+    close.at = x_align;
+    close.commit = true;
+    state_ = reloc::LoopState<T>{};
+    ls.verdict = reloc::LoopVerdict::kCommitted;
+    return Status::kOk;
+  }
+
+ private:
+  reloc::LoopState<T> state_;
+};
+
+/// A committed closure's rounds (the loop check's or the window's): the paired observations ranked by
+/// their landmark's position variance (the landmarks mapped before the drift first), rank k of p in
+/// round k rounds / p, the two most certain in the first. Out of line: its loops stay out of the
+/// caller's frame.  O(kMaxObservations^2)
+template <typename T, class B>
+[[gnu::noinline]] void closure_rounds(const MapView<T, B>& map, const Association<T, B>& assoc, int rounds,
+                                      std::array<std::uint8_t, B::kMaxObservations>& round) {
+  std::array<T, B::kMaxObservations> var{};
+  int p = 0;
+  for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+    const int k = map.slot_of(assoc.feature[i]);
+    round[static_cast<std::size_t>(i)] = 0;
+    if (k < 0) continue;  // unpaired, or an unknown id that update() refuses
+    var[static_cast<std::size_t>(i)] = map.position_var(k);
+    ++p;
+  }
+  for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+    if (map.slot_of(assoc.feature[i]) < 0) continue;
+    int rank = 0;                            // the pairs more certain than i (ties by index)
+    for (int k = 0; k < assoc.count; ++k) {  // <= kMaxObservations
+      if (k == i || map.slot_of(assoc.feature[k]) < 0) continue;
+      const T vk = var[static_cast<std::size_t>(k)], vi = var[static_cast<std::size_t>(i)];
+      rank += vk < vi || (vk == vi && k < i);
+    }
+    // The first round takes two pairs at least (a pose needs two points).
+    round[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(rank < 2 ? 0 : rank * rounds / p);
+  }
+}
+
+}  // namespace geojcbb::node

@@ -1,0 +1,158 @@
+// node/stages: the relocaliser (StepSettings::relocalise). Its state across scans: tracking, lost or
+// confirming, the scans left to confirm, the failed scans in a row, the pose covariance when lost.
+//   localise()  before the association: lost (the pose covariance over a trigger, asked, or failed
+//               scans) -> the scan aligned against the supported landmarks (reloc::align); an accepted
+//               alignment is returned as a Relocation for the step to apply
+//   confirm()   after the update: while confirming, reloc_confirm_scans jointly compatible scans with
+//               reloc_min_inliers pairs make the robot found, one without sends it back (Verdict)
+// Bounds: one align() call and one fit per lost scan; O(m) per tracked scan.
+// docs/relocalisation.md.
+#pragma once
+
+#include "geojcbb/core/association_config.hpp"
+#include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/reloc/align.hpp"
+
+namespace geojcbb::node {
+
+/// Where the robot stands with the relocaliser (StepSettings::relocalise).
+enum class Localisation : std::uint8_t {
+  kTracking = 0,  ///< the pose is trusted: association as usual
+  kLost,          ///< the pose is not trusted: each scan is aligned against the map, nothing else
+  kConfirming,    ///< relocalised at an aligned pose: associated as usual, not yet found
+};
+
+/// The relocaliser's part of a step.
+struct RelocStats {
+  Localisation state = Localisation::kTracking;  ///< after the step
+  bool aligned = false;                          ///< the scan was aligned against the map (the robot was lost)
+  bool relocalised = false;                      ///< the alignment was accepted: the filter was reset at its pose
+  bool found = false;                            ///< this scan confirmed the pose: back to tracking
+  bool rejected = false;                         ///< this scan failed the confirmation: lost again
+  int inliers = 0, rival_inliers = 0, misses = 0, hypotheses = 0;  ///< of the alignment
+};
+
+/// An accepted alignment, for the step to apply: ekf::Slam::relocalise_fitted(x, Pobs, pairs, lm, At)
+/// when pairs >= 2, else (or when the filter refuses it) ekf::Slam::relocalise(x, cov).
+template <typename T>
+struct Relocation {
+  bool accepted = false;
+  Pose2<T> x{};
+  Mat3<T> Pobs;  ///< the observations' part of the fit's covariance, inflated
+  Mat3<T> cov;   ///< the fit's whole covariance, inflated
+  int pairs = 0;
+};
+
+template <typename T, class B>
+class Relocaliser {
+ public:
+  void reset() {
+    state_ = Localisation::kTracking;
+    failed_scans_ = 0;
+  }
+  /// The user says so (RELOCALISE, SlamStep::lost).
+  void lost() { state_ = Localisation::kLost; }
+  Localisation state() const { return state_; }
+
+  /// Before the association. When lost, the scan is aligned against the supported landmarks; an
+  /// accepted pose is written to `out` with the fit's sensitivities in At and lm (slots), for the
+  /// step to apply and then call relocalised().
+  /// @return kOk; the statuses of AlignWorkspace::push_landmark and reloc::align (nothing changes).
+  [[nodiscard]] Status localise(const AssociationConfig<T, B>& cfg, const reloc::AlignOptions<T>& align,
+                                const Observations<T, B>& obs, const MapView<T, B>& map, AlignScratch<T, B>& scratch,
+                                Mat23<T>* At, std::int16_t* lm, RelocStats& rs, Relocation<T>& out) {
+    rs = RelocStats{};
+    out.accepted = false;
+    rs.state = state_;
+    if (!cfg.relocalise) return Status::kOk;
+    if (state_ == Localisation::kTracking) {
+      const T pos_var = map.pose_cov(0, 0) + map.pose_cov(1, 1);
+      if (!(pos_var < cfg.reloc_lost_position_var_m2) || !(map.pose_cov(2, 2) < cfg.reloc_lost_heading_var_rad2)) {
+        state_ = Localisation::kLost;
+      }
+    }
+    rs.state = state_;
+    if (state_ != Localisation::kLost) return Status::kOk;
+    scratch.clear();
+    for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
+      if (!map.supported(k)) continue;
+      const Status st = scratch.push(map, k);
+      if (st != Status::kOk) return st;
+    }
+    const Status st = reloc::align(obs, align, scratch.ws, scratch.result);
+    if (st != Status::kOk) return st;
+    const reloc::AlignResult<T, B>& a = scratch.result;
+    rs.aligned = true;
+    rs.inliers = a.inliers;
+    rs.rival_inliers = a.rival_inliers;
+    rs.misses = a.misses;
+    rs.hypotheses = a.hypotheses;
+    if (!a.accepted) return Status::kOk;
+    // The pose's correlation to the landmarks it was fitted to (their error moves the fit); the
+    // observations' part of its covariance times reloc_inflation.
+    Mat3<T> Pobs;
+    out.pairs = reloc::fit_sensitivities(scratch.ws, obs.count, a.pose, At, lm, Pobs);
+    for (int k = 0; k < out.pairs; ++k)
+      lm[k] = static_cast<std::int16_t>(scratch.slot_sorted(lm[k]));  // <= kMaxObservations
+    out.accepted = true;
+    out.x = a.pose;
+    out.Pobs = Pobs * cfg.reloc_inflation;
+    out.cov = a.cov * cfg.reloc_inflation;
+    return Status::kOk;
+  }
+  /// The step applied the Relocation; `lost_cov` is the pose covariance it had before.
+  void relocalised(const AssociationConfig<T, B>& cfg, const Mat3<T>& lost_cov, RelocStats& rs) {
+    lost_cov_ = lost_cov;
+    rs.relocalised = true;
+    state_ = cfg.reloc_confirm_scans > 0 ? Localisation::kConfirming : Localisation::kTracking;
+    rs.found = state_ == Localisation::kTracking;
+    rs.state = state_;
+    confirm_left_ = cfg.reloc_confirm_scans;
+    skip_confirm_ = true;  // the scan that was aligned does not confirm itself
+  }
+
+  /// After the update, with the scan's pairs, its observations and candidates. While tracking,
+  /// with reloc_lost_failed_scans > 0: a scan that pairs nothing although it has reloc_min_inliers
+  /// observations and as many candidates fails; that many in a row make the robot lost (a kidnap
+  /// the covariance does not show). @return true when the confirmation failed: the step puts the
+  /// pose covariance back to lost_covariance() and, if the filter takes it, calls rejected().
+  [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, int observations, int candidates,
+                             bool jointly_compatible, RelocStats& rs) {
+    const int need = cfg.reloc_min_inliers;
+    const bool failed = paired == 0 && observations >= need && candidates >= need;
+    failed_scans_ = state_ == Localisation::kTracking && failed ? failed_scans_ + 1 : 0;
+    if (cfg.relocalise && cfg.reloc_lost_failed_scans > 0 && failed_scans_ >= cfg.reloc_lost_failed_scans) {
+      state_ = Localisation::kLost;
+      failed_scans_ = 0;
+    }
+    bool reject = false;
+    if (state_ == Localisation::kConfirming && !skip_confirm_) {
+      if (paired >= need && jointly_compatible) {
+        if (--confirm_left_ <= 0) {
+          state_ = Localisation::kTracking;
+          rs.found = true;
+        }
+      } else {
+        reject = true;
+      }
+    }
+    skip_confirm_ = false;
+    rs.state = state_;
+    return reject;
+  }
+  const Mat3<T>& lost_covariance() const { return lost_cov_; }
+  void rejected(RelocStats& rs) {
+    state_ = Localisation::kLost;
+    rs.rejected = true;
+    rs.state = state_;
+  }
+
+ private:
+  Localisation state_ = Localisation::kTracking;
+  int confirm_left_ = 0;
+  int failed_scans_ = 0;  ///< scans in a row that paired nothing while tracking (reloc_lost_failed_scans)
+  bool skip_confirm_ = false;
+  Mat3<T> lost_cov_ = Mat3<T>::Identity();
+};
+
+}  // namespace geojcbb::node

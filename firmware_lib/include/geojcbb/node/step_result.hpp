@@ -1,0 +1,64 @@
+// node: what one SLAM step reports (StepResult: per observation its outcome, the stages' stats, the
+// stage counts) and the host's way into it (AssociationOverride). node/slam_step.hpp fills them.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "geojcbb/associate.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/node/stages/relocaliser.hpp"
+#include "geojcbb/reloc/loop.hpp"
+#include "geojcbb/reloc/window.hpp"
+
+namespace geojcbb::node {
+
+/// Per observation of a scan, what became of it.
+enum class Outcome : std::uint8_t {
+  kPaired = 0,    ///< feature: the map landmark's id
+  kNewLandmark,   ///< no compatible candidate; became the landmark `feature`
+  kNewDropped,    ///< no compatible candidate, but inside the augmentation gate (or augmentation off): dropped
+  kUnmatched,     ///< compatible candidates, left unpaired by the search (ambiguous)
+  kNotAugmented,  ///< would have become a landmark, but the map is full
+};
+
+/// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without).
+struct StageCounts {
+  std::uint32_t predict_local = 0, associate = 0, update = 0, augment_review = 0, total = 0;
+  std::uint32_t relocalise = 0;  ///< the alignment of a lost scan (0 otherwise)
+  std::uint32_t loop = 0;        ///< the loop check (0 when it did not run)
+  std::uint32_t window = 0;      ///< clusters first and the hypothesis window (0 when they did not run)
+};
+
+template <typename T, class B>
+struct StepResult {
+  int count = 0;  ///< observations
+  std::array<Outcome, B::kMaxObservations> outcome{};
+  std::array<FeatureId, B::kMaxObservations> feature{};  ///< see Outcome; -1 when none
+  std::array<T, B::kMaxObservations> d2{};               ///< the association's d2 (core semantics)
+  AssociationDiagnostics diag;
+  ekf::LocalMapStats local;
+  ekf::ReviewStats review;
+  RelocStats reloc;
+  reloc::LoopStats<T> loop;
+  reloc::WindowStats<T> window;
+  StageCounts counts;
+};
+
+/// A free-running counter read before and after each stage (e.g. SysTick or an instruction count);
+/// nullptr: no counts.
+using CounterFn = std::uint32_t (*)();
+
+/// The host's way into step(): an association made by other means (the evaluation's ground-truth
+/// reference) in place of the configured one and of the stages that edit it (tentative pairing,
+/// loop check, clusters first, window). It writes every observation's feature and d2 and the count;
+/// the step recounts the pairings. A non-kOk status is returned by step() with nothing changed.
+template <typename T, class B>
+struct AssociationOverride {
+  Status (*fn)(void* ctx, const Observations<T, B>& obs, const Prediction<T, B>& pred, const MapView<T, B>& map,
+               Association<T, B>& out) = nullptr;
+  void* ctx = nullptr;
+};
+
+}  // namespace geojcbb::node
