@@ -215,13 +215,18 @@ class SlamStep {
   /// the pose's correlation to the landmarks it was fitted to, or, when the filter refuses that, as
   /// the fit's own covariance. The sensitivities go through the update's scratch (ekf_ws_: Hp, lm),
   /// unused until predict_local.
-  Status localise(const Observations<T, B>& obs, const MapView<T, B>& map, RelocStats& rs) {
+  [[gnu::noinline]] Status localise(const Observations<T, B>& obs, const MapView<T, B>& map, RelocStats& rs) {
+    const Status st = reloc_.localise(cfg_, align_, obs, map, scratch_, rs);
+    if (st != Status::kOk || !rs.aligned || !scratch_.result.accepted) return st;
+    return relocate(obs, rs);
+  }
+  /// An accepted alignment applied (out of line: its matrices stay off the alignment's call chain).
+  [[gnu::noinline]] Status relocate(const Observations<T, B>& obs, RelocStats& rs) {
     Relocation<T> r;
-    Status st = reloc_.localise(cfg_, align_, obs, map, scratch_, ekf_ws_.Hp.data(), ekf_ws_.lm.data(), rs, r);
-    if (st != Status::kOk || !r.accepted) return st;
+    reloc_.fit(cfg_, obs, scratch_, ekf_ws_.Hp.data(), ekf_ws_.lm.data(), r);
     const Mat3<T> lost = slam_.pose_covariance();
-    st = r.pairs >= 2 ? slam_.relocalise_fitted(r.x, r.Pobs, r.pairs, ekf_ws_.lm.data(), ekf_ws_.Hp.data())
-                      : Status::kNotPositiveDefinite;
+    Status st = r.pairs >= 2 ? slam_.relocalise_fitted(r.x, r.Pobs, r.pairs, ekf_ws_.lm.data(), ekf_ws_.Hp.data())
+                             : Status::kNotPositiveDefinite;
     if (st != Status::kOk) st = slam_.relocalise(r.x, r.cov);
     if (st != Status::kOk) return st;
     reloc_.relocalised(cfg_, lost, rs);
@@ -230,7 +235,8 @@ class SlamStep {
 
   /// The configured association on the prediction. With tentative_isolated, it sees only the
   /// `confirmed` leading candidates, and the tentative ones are paired afterwards (Tentative::pair).
-  Status associate_configured(const Observations<T, B>& obs, const MapView<T, B>& map, int confirmed) {
+  [[gnu::noinline]] Status associate_configured(const Observations<T, B>& obs, const MapView<T, B>& map,
+                                                int confirmed) {
     if (!cfg_.tentative_isolated) return associate(obs, pred_, cfg_, ws_, assoc_);
     const int all = pred_.count;
     pred_.count = confirmed;  // the leading candidates: C's leading blocks are their own C
@@ -286,8 +292,9 @@ class SlamStep {
   /// Update (a committed closure: the pose block inflated, the pairs in rounds at its pose; the
   /// pairs with tentative landmarks set aside), augment, review (`hold`: the scan is no evidence),
   /// and the duplicate merge. @return kOk; the statuses of update (then nothing changed).
-  Status commit(const Observations<T, B>& obs, const MapView<T, B>& map, bool hold, StepResult<T, B>& out,
-                CounterFn clock) {
+  /// The three halves of step() are out of line: inlined, they took step()'s frame past 512 B.
+  [[gnu::noinline]] Status commit(const Observations<T, B>& obs, const MapView<T, B>& map, bool hold,
+                                  StepResult<T, B>& out, CounterFn clock) {
     const std::uint32_t t2 = clock ? clock() : 0;
     const bool closing = close_.commit;
     const Mat3<T> before = slam_.pose_covariance();

@@ -36,11 +36,12 @@ class HypothesisWindow {
 
   /// One tracked scan with no loop closure pending or committed, the frozen map in scratch.
   /// `hold`: the scan is no evidence for the review (hypothesis_hold left no pair).
-  [[gnu::noinline, gnu::cold]] void run(const AssociationConfig<T, B>& cfg, const Observations<T, B>& obs,
-                                        const Prediction<T, B>& pred, const MapView<T, B>& map,
-                                        AlignScratch<T, B>& scratch, Seeds<T, B>& seeds, const SeedModel<T>& sm,
-                                        Association<T, B>& assoc, reloc::WindowStats<T>& out, Closure<T>& close,
-                                        bool& hold) {
+  /// Inlined into its one caller (SlamStep::hypotheses): a frame of its own took the device's
+  /// deepest call chain past 2,048 B.
+  [[gnu::always_inline]] void run(const AssociationConfig<T, B>& cfg, const Observations<T, B>& obs,
+                                  const Prediction<T, B>& pred, const MapView<T, B>& map, AlignScratch<T, B>& scratch,
+                                  Seeds<T, B>& seeds, const SeedModel<T>& sm, Association<T, B>& assoc,
+                                  reloc::WindowStats<T>& out, Closure<T>& close, bool& hold) {
     const int m = obs.count;
     const T margin = cfg.hypothesis_margin_nats;
     if (count_ == 0) {

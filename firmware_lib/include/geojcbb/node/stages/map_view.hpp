@@ -25,8 +25,8 @@ class MapView {
 
   int size() const { return slam_->landmarks(); }
   FeatureId id(int k) const { return slam_->id(k); }
-  /// The slot of feature `id`, or -1 (never mapped, removed, or not a feature: id < 0).
-  int slot_of(FeatureId id) const { return id >= 0 ? slam_->index_of(id) : -1; }
+  /// The slot of feature `id`, or -1 (never mapped, removed, or not a feature: kNewFeature, kUnmatched).
+  int slot_of(FeatureId id) const { return slam_->index_of(id); }
   Vec2<T> mean(int k) const { return slam_->landmark(k); }
   /// The landmark's 2x2 covariance block.
   Mat2<T> cov(int k) const {

@@ -54,15 +54,13 @@ class Relocaliser {
   void lost() { state_ = Localisation::kLost; }
   Localisation state() const { return state_; }
 
-  /// Before the association. When lost, the scan is aligned against the supported landmarks; an
-  /// accepted pose is written to `out` with the fit's sensitivities in At and lm (slots), for the
-  /// step to apply and then call relocalised().
+  /// Before the association. When lost, the scan is aligned against the supported landmarks
+  /// (scratch.result); an accepted pose is then fit() for the step to apply, which calls relocalised().
   /// @return kOk; the statuses of AlignWorkspace::push_landmark and reloc::align (nothing changes).
   [[nodiscard]] Status localise(const AssociationConfig<T, B>& cfg, const reloc::AlignOptions<T>& align,
                                 const Observations<T, B>& obs, const MapView<T, B>& map, AlignScratch<T, B>& scratch,
-                                Mat23<T>* At, std::int16_t* lm, RelocStats& rs, Relocation<T>& out) {
+                                RelocStats& rs) {
     rs = RelocStats{};
-    out.accepted = false;
     rs.state = state_;
     if (!cfg.relocalise) return Status::kOk;
     if (state_ == Localisation::kTracking) {
@@ -87,18 +85,24 @@ class Relocaliser {
     rs.rival_inliers = a.rival_inliers;
     rs.misses = a.misses;
     rs.hypotheses = a.hypotheses;
-    if (!a.accepted) return Status::kOk;
-    // The pose's correlation to the landmarks it was fitted to (their error moves the fit); the
-    // observations' part of its covariance times reloc_inflation.
-    Mat3<T> Pobs;
+    return Status::kOk;
+  }
+  /// After localise() with scratch.result.accepted: the accepted pose for the step to apply, with the
+  /// pose's correlation to the landmarks it was fitted to (their error moves the fit) in At and lm
+  /// (slots); the observations' part of its covariance times reloc_inflation. Its own frame: the
+  /// alignment's call chain does not carry it.
+  [[gnu::noinline]] void fit(const AssociationConfig<T, B>& cfg, const Observations<T, B>& obs,
+                             const AlignScratch<T, B>& scratch, Mat23<T>* At, std::int16_t* lm,
+                             Relocation<T>& out) const {
+    const reloc::AlignResult<T, B>& a = scratch.result;
+    Mat3<T> Pobs;  // written by fit_sensitivities when it fits (pairs >= 2)
     out.pairs = reloc::fit_sensitivities(scratch.ws, obs.count, a.pose, At, lm, Pobs);
     for (int k = 0; k < out.pairs; ++k)
       lm[k] = static_cast<std::int16_t>(scratch.slot_sorted(lm[k]));  // <= kMaxObservations
     out.accepted = true;
     out.x = a.pose;
-    out.Pobs = Pobs * cfg.reloc_inflation;
+    if (out.pairs >= 2) out.Pobs = Pobs * cfg.reloc_inflation;  // else not used (relocalise with cov)
     out.cov = a.cov * cfg.reloc_inflation;
-    return Status::kOk;
   }
   /// The step applied the Relocation; `lost_cov` is the pose covariance it had before.
   void relocalised(const AssociationConfig<T, B>& cfg, const Mat3<T>& lost_cov, RelocStats& rs) {
