@@ -36,7 +36,6 @@ struct RelocStats {
 /// when pairs >= 2, else (or when the filter refuses it) ekf::Slam::relocalise(x, cov).
 template <typename T>
 struct Relocation {
-  bool accepted = false;
   Pose2<T> x{};
   Mat3<T> Pobs;  ///< the observations' part of the fit's covariance, inflated
   Mat3<T> cov;   ///< the fit's whole covariance, inflated
@@ -99,7 +98,6 @@ class Relocaliser {
     out.pairs = reloc::fit_sensitivities(scratch.ws, obs.count, a.pose, At, lm, Pobs);
     for (int k = 0; k < out.pairs; ++k)
       lm[k] = static_cast<std::int16_t>(scratch.slot_sorted(lm[k]));  // <= kMaxObservations
-    out.accepted = true;
     out.x = a.pose;
     if (out.pairs >= 2) out.Pobs = Pobs * cfg.reloc_inflation;  // else not used (relocalise with cov)
     out.cov = a.cov * cfg.reloc_inflation;
