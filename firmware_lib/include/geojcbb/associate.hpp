@@ -88,15 +88,6 @@ int compatible_observations(int m, const CompatibilityTable<T, B>& table) {
   return n;
 }
 
-/// The consistency stage's options for this call: the config's graph options in its local region.
-template <typename T, class B>
-ConsistencyOptions<T> consistency_options(const AssociationConfig<T, B>& cfg) {
-  ConsistencyOptions<T> o = cfg.consistency;
-  o.local_region = cfg.local_region;
-  o.local_radius_m = cfg.local_radius_m;
-  return o;
-}
-
 /// Seed stage: when the pose is uncertain, the pose-free clique in ws.seed; `seeded` when it has at
 /// least seed_min_pairings pairings and passes the joint test at its size.
 /// @return kOk; kNotPositiveDefinite (C not PSD).

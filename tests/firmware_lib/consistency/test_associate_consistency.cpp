@@ -29,7 +29,10 @@ std::unique_ptr<Problem<T, B>> problem_of(const host::Scene& s) {
 template <typename T>
 AssociationConfig<T, B> jcbb_config(bool verify) {
   auto cfg = make_config<T, B>(SearchMethod::kJcbb, false, false);
-  REQUIRE(cfg.consistency.set_confidence(0.99999, 0.999) == Status::kOk);
+  ConsistencyOptions<T> levels;
+  REQUIRE(levels.set_confidence(0.99999, 0.999) == Status::kOk);
+  cfg.consistency_wide_d2 = levels.wide_d2;
+  cfg.consistency_pair_d2 = levels.pair_d2;
   cfg.verify = verify;
   return cfg;
 }
@@ -163,7 +166,8 @@ TEST_CASE_TEMPLATE("seed: not tried when the pose is certain; PCJCBB is then JCB
     const auto cfg = pcjcbb_config<T>();
     auto plain = make_config<T, B>(SearchMethod::kJcbb, true, true);
     plain.verify = true;
-    plain.consistency = cfg.consistency;
+    plain.consistency_wide_d2 = cfg.consistency_wide_d2;
+    plain.consistency_pair_d2 = cfg.consistency_pair_d2;
     REQUIRE(associate(a->obs, a->pred, cfg, a->ws, a->out) == Status::kOk);
     REQUIRE(associate(b->obs, b->pred, plain, b->ws, b->out) == Status::kOk);
     CAPTURE(seed);
@@ -188,15 +192,15 @@ TEST_CASE_TEMPLATE("seed and verify: bad options and input give a status and lea
   const T nan = std::numeric_limits<T>::quiet_NaN();
   {
     auto cfg = jcbb_config<T>(true);
-    cfg.consistency.pair_d2 = nan;  // verify needs the pairwise gate
+    cfg.consistency_pair_d2 = nan;  // verify needs the pairwise gate
     expect(cfg, Status::kInvalidInput);
     cfg.verify = false;  // unused options are not checked
     CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kOk);
   }
   {
     auto cfg = pcjcbb_config<T>();
-    cfg.consistency.node_budget = kMaxCliqueSearchNodes + 1;
-    expect(cfg, Status::kInvalidInput);
+    cfg.consistency_wide_d2 = nan;       // the seed needs the wide gate (the clique budget is the stage's
+    expect(cfg, Status::kInvalidInput);  // constant: a budget over its cap, test_consistent_hypothesis)
   }
   {
     auto cfg = pcjcbb_config<T>();
@@ -248,8 +252,8 @@ TEST_CASE("PCJCBB: its name and its switches") {
   // The preset's consistency thresholds are the chi-square quantiles they stand for.
   ConsistencyOptions<double> ref;
   REQUIRE(ref.set_confidence(0.99999, 0.999) == Status::kOk);
-  CHECK(cfg.consistency.wide_d2 == doctest::Approx(ref.wide_d2).epsilon(1e-6));
-  CHECK(cfg.consistency.pair_d2 == doctest::Approx(ref.pair_d2).epsilon(1e-6));
+  CHECK(consistency_options(cfg).wide_d2 == doctest::Approx(ref.wide_d2).epsilon(1e-6));
+  CHECK(consistency_options(cfg).pair_d2 == doctest::Approx(ref.pair_d2).epsilon(1e-6));
   // The papers' presets are unchanged unless the verification is asked for.
   for (int k = 0; k < kPaperStrategyCount; ++k) {
     StepSettings<double> sp;

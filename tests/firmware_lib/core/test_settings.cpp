@@ -4,9 +4,14 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
+#include <tuple>
 #include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "geojcbb/c_settings.hpp"
 #include "geojcbb/node/node.hpp"
@@ -89,6 +94,64 @@ TEST_CASE("options: every option crosses the C boundary and CONFIG, none is drop
   // Every option reaches a device today; a future host-only option would be refused by the link
   // (host_tools/link/stream.cpp) instead.
   CHECK(carried == options::kCount);
+}
+
+/// CONFIG field K accepts a wire value exactly when the table's range holds it (what configure()
+/// checks on the device): probed at every value of a byte and around each bound of a real.
+template <std::size_t K>
+void check_wire_range() {
+  constexpr auto f = std::get<K>(proto::Config::fields());
+  constexpr int i = node::config_wire::option_of<K>();
+  if constexpr (i >= 0) {
+    using W = std::remove_reference_t<decltype(proto::Config{}.*(f.member))>;
+    const options::Info& info = options::kInfo[i];
+    CAPTURE(info.name);
+    if constexpr (std::is_same<W, float>::value) {
+      const float inf = std::numeric_limits<float>::infinity();
+      std::vector<float> probes = {0.0f,
+                                   -0.0f,
+                                   1.0f,
+                                   -1.0f,
+                                   0.5f,
+                                   100.0f,
+                                   -100.0f,
+                                   1e6f,
+                                   1e30f,
+                                   -1e30f,
+                                   inf,
+                                   -inf,
+                                   std::numeric_limits<float>::quiet_NaN()};
+      for (const double bound : {info.range.lo, info.range.hi}) {
+        const float b = static_cast<float>(bound);
+        probes.insert(probes.end(), {b, std::nextafter(b, inf), std::nextafter(b, -inf)});
+      }
+      for (const float v : probes) {
+        CAPTURE(v);
+        CHECK((proto::check_float(f.range, v) == proto::Error::kOk) == info.range.contains(static_cast<double>(v)));
+      }
+    } else if constexpr (std::is_same<W, bool>::value) {
+      CHECK(f.range.kind == proto::Range::Kind::kOneOf);  // a bool's domain: 0 and 1
+      CHECK((f.range.lo == 0 && f.range.hi == 1));
+    } else {
+      static_assert(sizeof(W) <= 4, "an integer field");
+      std::vector<std::int64_t> probes;
+      for (std::int64_t v = 0; v <= 255; ++v) probes.push_back(v);
+      if (sizeof(W) > 1)
+        probes.insert(probes.end(), {256, 65535, static_cast<std::int64_t>(std::numeric_limits<W>::max())});
+      for (const std::int64_t v : probes) {
+        CAPTURE(v);
+        CHECK(proto::int_in_range(f.range, v) == info.range.contains(static_cast<double>(v)));
+      }
+    }
+  }
+}
+template <std::size_t... K>
+void check_wire_ranges(std::index_sequence<K...>) {
+  (check_wire_range<K>(), ...);
+}
+
+TEST_CASE("options: CONFIG's range of each field is the table's") {
+  check_wire_ranges(std::make_index_sequence<node::config_wire::kFieldCount>{});
 }
 
 TEST_CASE_TEMPLATE("options: configure refuses every option outside its range and changes nothing", T, float, double) {

@@ -242,7 +242,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
         bool near = false;
         for (int i = 0; i < base->obs.count; ++i) {
           const Mat2<T> S = base->pred.C.block(j, j) + base->obs.R[i];
-          near = near || mahalanobis2(innovation(base->obs.z[i], base->pred.h[j]), S) <= cfg.consistency.wide_d2;
+          near = near || mahalanobis2(innovation(base->obs.z[i], base->pred.h[j]), S) <= cfg.consistency_wide_d2;
         }
         if (!near) unread = j;
       }

@@ -95,14 +95,11 @@ struct AssociationConfig : StepSettings<T> {
   bool seed = false;
 
   // Derived from the settings (make_strategy): the chi-square gates of `confidence`, the GMM-EM
-  // variant of `papers_em`, the covariance check of `full_covariance_check`, the graph thresholds
-  // of consistency_wide_d2 and consistency_pair_d2.
+  // variant of `papers_em`, the covariance check of `full_covariance_check`. The consistency
+  // stage's options are built where they are used (consistency_options below).
   GateThresholds<T, B::kMaxObservations> gate;                     ///< set with GateThresholds::from_confidence
   EmOptions<T> em;                                                 ///< GMM-EM options (iterations <= kMaxEmIterations)
   CovarianceCheck covariance_check = CovarianceCheck::kWhereRead;  ///< see CovarianceCheck
-  /// Graph options of verify and seed: pairwise gate, wide gate, clique budget. Its local region is
-  /// taken from this config's, not from here.
-  ConsistencyOptions<T> consistency;
 
   // Stage constants no option reaches.
   int kmeans_max_iterations = kMaxKMeansIterations;  ///< 1 .. kMaxKMeansIterations
@@ -118,5 +115,15 @@ struct AssociationConfig : StepSettings<T> {
   /// The ambiguity margin in the pipeline's scalar.
   T margin() const { return static_cast<T>(this->ambiguity_margin); }
 };
+
+/// The graph options of verify and seed (consistency/): the table's thresholds and radius, the
+/// preset's local region, the wide pairing gate and the default clique budget.
+template <typename T, class B>
+ConsistencyOptions<T> consistency_options(const AssociationConfig<T, B>& cfg) {
+  ConsistencyOptions<T> out;
+  bind_options(cfg, out);
+  out.local_region = cfg.local_region;
+  return out;
+}
 
 }  // namespace geojcbb

@@ -11,6 +11,7 @@
 
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/math.hpp"
+#include "geojcbb/core/settings.hpp"
 #include "geojcbb/core/status.hpp"
 
 namespace geojcbb {
@@ -67,5 +68,16 @@ struct ConsistencyOptions {
   /// The candidate with predicted measurement h is in the local region.
   bool in_region(const Vec2<T>& h) const { return !local_region || h.x() < local_radius_m; }
 };
+
+/// ConsistencyOptions' members that are options of the table, (member, option): local_region is the
+/// preset's switch, pairing_gate and node_budget the stage's (core/association_config.hpp,
+/// consistency_options).
+#define GEOJCBB_CONSISTENCY_OPTIONS(F) \
+  F(wide_d2, consistency_wide_d2) F(pair_d2, consistency_pair_d2) F(local_radius_m, local_radius_m)
+/// out's options of the table from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
+template <class In, typename T>
+void bind_options(const In& in, ConsistencyOptions<T>& out) {
+  GEOJCBB_CONSISTENCY_OPTIONS(GEOJCBB_BIND_OPTION)
+}
 
 }  // namespace geojcbb

@@ -196,6 +196,17 @@ void for_each_option_pair(S& a, R& b, F&& f) {
 #undef GEOJCBB_OPT_VISIT2
 }
 
+/// A stage's own option struct (ekf::LandmarkPolicy, reloc::AlignOptions, ...) takes the table's
+/// options through one list next to the struct, NAME_OPTIONS(F) with F(member, option) per member,
+/// and bind_options expands it: every member is assigned its option by generated code, never by a
+/// hand-written copy. An option the table does not have, or a member whose type is not the option's
+/// (a silent conversion), fails to compile. Used inside a function with `in` (the settings, or a
+/// struct that inherits them) and `out` (the stage's struct).
+#define GEOJCBB_BIND_OPTION(member, option)                                                                 \
+  static_assert(std::is_same<std::decay_t<decltype(out.member)>, std::decay_t<decltype(in.option)>>::value, \
+                #member " has the type of the option " #option);                                            \
+  out.member = in.option;
+
 /// Every option within its range, and max_range_m > min_range_m. Capacity limits are make_strategy's.
 template <typename T>
 [[nodiscard]] bool in_range(const StepSettings<T>& s) {

@@ -38,11 +38,11 @@ template <typename T, class B>
   GateThresholds<T, B::kMaxObservations> gate;
   Status st = GateThresholds<T, B::kMaxObservations>::from_confidence(p.confidence, p.confidence, gate);
   if (st != Status::kOk) return st;
-  ConsistencyOptions<T> consistency;
-  consistency.wide_d2 = p.consistency_wide_d2;
-  consistency.pair_d2 = p.consistency_pair_d2;
-  if (!consistency.valid()) return Status::kInvalidInput;
   const bool region = s == Strategy::kGemjcbb || s == Strategy::kGeojcbb;
+  ConsistencyOptions<T> consistency;
+  bind_options(p, consistency);
+  consistency.local_region = region;
+  if (!consistency.valid()) return Status::kInvalidInput;
   // RJC replaces one ungrouped JCBB search (jcbb/rjc.hpp): refused here rather than at every scan.
   const bool grouped = region || s == Strategy::kKjcbb || s == Strategy::kDfjcbb;
   if (p.rjc && (s == Strategy::kIcnn || grouped || p.ambiguity_margin > 0 ||
@@ -70,7 +70,6 @@ template <typename T, class B>
   out.em.stop = p.papers_em ? EmStop::kObjective : EmStop::kGroupsStable;
   out.em.start = p.papers_em ? EmStart::kFarthestFirst : EmStart::kKMeans;
   out.covariance_check = p.full_covariance_check ? CovarianceCheck::kFull : CovarianceCheck::kWhereRead;
-  out.consistency = consistency;
   // Stage constants, set one by one: a default-constructed temporary would cost the frame as much as
   // a local copy.
   out.kmeans_max_iterations = kMaxKMeansIterations;

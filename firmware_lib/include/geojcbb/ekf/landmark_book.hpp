@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/settings.hpp"
 
 namespace geojcbb::ekf {
 
@@ -44,6 +45,21 @@ struct LandmarkPolicy {
            confirm_min_reviews < max_tentative_reviews;
   }
 };
+/// LandmarkPolicy's members that are options of the table, (member, option); static_gate_d2 is the
+/// chi-square quantile of static_gate_level (node::SlamStep::configure).
+// clang-format off
+#define GEOJCBB_LANDMARK_POLICY_OPTIONS(F)        \
+  F(confirm_hits, confirm_hits)                   \
+  F(max_misses, max_misses)                       \
+  F(max_tentative_reviews, max_tentative_reviews) \
+  F(miss_probability, miss_probability)           \
+  F(confirm_min_reviews, confirm_min_reviews)
+// clang-format on
+/// out's options of the table from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
+template <class In>
+void bind_options(const In& in, LandmarkPolicy& out) {
+  GEOJCBB_LANDMARK_POLICY_OPTIONS(GEOJCBB_BIND_OPTION)
+}
 
 struct ReviewStats {
   int expected = 0;        ///< landmarks in the prediction that were in view

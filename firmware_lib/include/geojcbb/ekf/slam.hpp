@@ -94,6 +94,14 @@ struct Visibility {
   T half_fov_rad = T(0);
   T occlusion_rad = T(0);
 };
+/// Visibility's members, all options of the table (core/settings.hpp, bind_options).
+#define GEOJCBB_VISIBILITY_OPTIONS(F) \
+  F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad) F(occlusion_rad, occlusion_rad)
+/// out from the settings `in`.
+template <class In, typename T>
+void bind_options(const In& in, Visibility<T>& out) {
+  GEOJCBB_VISIBILITY_OPTIONS(GEOJCBB_BIND_OPTION)
+}
 
 /// How the filter linearises.
 struct FilterOptions {
@@ -101,6 +109,13 @@ struct FilterOptions {
   /// estimate (the standard EKF).
   bool first_estimates_jacobians = true;
 };
+/// FilterOptions' members, options of the table (core/settings.hpp, bind_options).
+#define GEOJCBB_FILTER_OPTIONS(F) F(first_estimates_jacobians, first_estimates_jacobians)
+/// out from the settings `in`.
+template <class In>
+void bind_options(const In& in, FilterOptions& out) {
+  GEOJCBB_FILTER_OPTIONS(GEOJCBB_BIND_OPTION)
+}
 
 struct LocalMapStats {
   int in_region = 0;       ///< landmarks within the radius

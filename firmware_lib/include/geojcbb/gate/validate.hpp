@@ -50,7 +50,7 @@ template <typename T, class B>
       !(std::isfinite(cfg.dbscan_eps_m) && cfg.dbscan_eps_m > T(0)) || cfg.dbscan_min_points < 1) {
     return Status::kInvalidInput;
   }
-  if ((cfg.verify || cfg.seed) && !cfg.consistency.valid()) return Status::kInvalidInput;
+  if ((cfg.verify || cfg.seed) && !consistency_options(cfg).valid()) return Status::kInvalidInput;
   if (cfg.seed && (!(std::isfinite(cfg.seed_min_position_var_m2) && cfg.seed_min_position_var_m2 > T(0)) ||
                    cfg.seed_min_pairings < 2 || cfg.search != SearchMethod::kJcbb)) {
     return Status::kInvalidInput;

@@ -528,7 +528,7 @@ class Node {
     send(n);
   }
   void error(proto::Error e) {
-    if (!proto::detail::is_reportable(e)) e = proto::Error::kInternal;
+    if (!proto::is_reportable(e)) e = proto::Error::kInternal;
     proto::ErrorReport r;
     r.error = e;
     r.offending_type = rx_type_;

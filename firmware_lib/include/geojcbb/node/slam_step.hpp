@@ -62,23 +62,16 @@ class SlamStep {
       st = chi2_inv(s.static_gate_level, 2, static_gate);
       if (st != Status::kOk) return st;
     }
-    const ekf::LandmarkPolicy policy{s.confirm_hits,
-                                     s.max_misses,
-                                     s.max_tentative_reviews,
-                                     s.miss_probability,
-                                     static_cast<float>(static_gate),
-                                     s.confirm_min_reviews};
+    // The stages' option structs from the table (bind_options: generated, type-checked).
+    ekf::LandmarkPolicy policy;
+    ekf::bind_options(s, policy);
+    policy.static_gate_d2 = static_cast<float>(static_gate);
     if (!policy.valid()) return Status::kInvalidInput;
     reloc::AlignOptions<T> align;
-    align.base_pairs = s.reloc_base_pairs;
-    align.min_inliers = s.reloc_min_inliers;
-    align.margin = s.reloc_margin;
-    align.min_range_m = s.min_range_m;
-    align.max_range_m = s.max_range_m;
-    align.half_fov_rad = s.half_fov_rad;
+    reloc::bind_options(s, align);
     if (!align.valid()) return Status::kInvalidInput;
-    reloc::AlignOptions<T> loop_align = align;
-    loop_align.min_inliers = s.loop_min_inliers;
+    reloc::AlignOptions<T> loop_align;
+    reloc::bind_loop_options(s, loop_align);
     if (!loop_align.valid()) return Status::kInvalidInput;
     // Last: make_strategy checks before it writes, so a refusal here changes nothing either.
     st = make_strategy(s.strategy, s, cfg_);
@@ -91,9 +84,9 @@ class SlamStep {
     window_.reset();
     align_ = align;
     gate_ = static_cast<T>(gate);
-    view_ = ekf::Visibility<T>{s.min_range_m, s.max_range_m, s.half_fov_rad, s.occlusion_rad};
+    ekf::bind_options(s, view_);
     policy_ = policy;
-    filter_.first_estimates_jacobians = s.first_estimates_jacobians;
+    ekf::bind_options(s, filter_);
     configured_ = true;
     return Status::kOk;
   }

@@ -65,6 +65,24 @@ struct AlignOptions {
            min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m);
   }
 };
+/// AlignOptions' members that are options of the table, (member, option), besides min_inliers:
+/// the relocaliser's is reloc_min_inliers, the loop check's loop_min_inliers (bind_options,
+/// bind_loop_options). The other members are constants of the alignment.
+#define GEOJCBB_ALIGN_OPTIONS(F)  \
+  F(base_pairs, reloc_base_pairs) \
+  F(margin, reloc_margin) F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad)
+/// The relocaliser's alignment from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
+template <class In, typename T>
+void bind_options(const In& in, AlignOptions<T>& out) {
+  GEOJCBB_ALIGN_OPTIONS(GEOJCBB_BIND_OPTION)
+  GEOJCBB_BIND_OPTION(min_inliers, reloc_min_inliers)
+}
+/// The loop check's alignment (also the window's and clusters-first's): loop_min_inliers.
+template <class In, typename T>
+void bind_loop_options(const In& in, AlignOptions<T>& out) {
+  GEOJCBB_ALIGN_OPTIONS(GEOJCBB_BIND_OPTION)
+  GEOJCBB_BIND_OPTION(min_inliers, loop_min_inliers)
+}
 
 template <typename T, class B>
 struct AlignResult {

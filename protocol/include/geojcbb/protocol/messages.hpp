@@ -72,11 +72,6 @@ inline bool spd3(const std::array<float, 6>& u) {
   const double d2 = static_cast<double>(u[5]) - l20 * l20 * d0 - l21 * l21 * d1;
   return d2 > 0.0;
 }
-/// A code a NACK or ERROR may carry: a real error (not kOk, not kIncomplete) of this schema.
-constexpr bool is_reportable(Error e) {
-  const auto v = static_cast<std::uint8_t>(e);
-  return v >= static_cast<std::uint8_t>(Error::kBadLength) && v < kErrorCount;
-}
 /// The range of a reported error code: kBadLength .. the last Error.
 constexpr Range reportable_error() {
   return range::between(static_cast<std::int64_t>(Error::kBadLength), static_cast<std::int64_t>(kErrorCount) - 1);
@@ -85,6 +80,12 @@ constexpr Range reportable_error() {
 inline constexpr const char* kCovUpperNames[6] = {"p00", "p01", "p02", "p11", "p12", "p22"};
 
 }  // namespace detail
+
+/// A code a NACK or ERROR may carry: a real error (not kOk, not kIncomplete) of this schema.
+constexpr bool is_reportable(Error e) {
+  const auto v = static_cast<std::uint8_t>(e);
+  return v >= static_cast<std::uint8_t>(Error::kBadLength) && v < kErrorCount;
+}
 
 // ---------------------------------------------------------------------------------------------
 
@@ -177,7 +178,7 @@ struct Config : Codec<Config> {
   std::uint8_t dbscan_min_points = 2;       ///< >= 1
   std::uint32_t node_budget = 0;            ///< JCBB nodes per scan (0: the device's capacity)
   float min_range_m = 0.0f;                 ///< >= 0
-  float max_range_m = 10.0f;                ///< > min_range_m
+  float max_range_m = 10.0f;                ///< > 0, > min_range_m
   float half_fov_rad = kPiF;                ///< (0, pi]
   float sensor_x_m = 0.0f;                  ///< the sensor's mount on the robot: ahead [-100, 100]
   float sensor_y_m = 0.0f;                  ///< to the left [-100, 100]
@@ -188,7 +189,7 @@ struct Config : Codec<Config> {
   std::uint8_t confirm_min_reviews = 0;     ///< reviews a landmark must have lived to be confirmed
   bool tentative_isolated = false;          ///< tentative landmarks paired apart, updating only themselves
   bool joint_recheck = true;
-  float ambiguity_margin = 0.0f;  ///< >= 0 (0: off)
+  float ambiguity_margin = 0.0f;  ///< [0, 1e6) (0: off)
   bool new_if_candidates_taken = false;
   bool verify = false;
   bool full_covariance_check = false;
@@ -250,7 +251,7 @@ struct Config : Codec<Config> {
         field("node_budget", &Config::node_budget, range::any(), "nodes",
               "JCBB nodes per scan, 0: the device's `max_jcbb_nodes`; the device checks ≤ it"),
         field("min_range_m", &Config::min_range_m, range::not_below(0.0f), "m"),
-        field("max_range_m", &Config::max_range_m, range::finite(), "m", "> `min_range_m`"),
+        field("max_range_m", &Config::max_range_m, range::above(0.0f), "m", "> `min_range_m`"),
         field("half_fov_rad", &Config::half_fov_rad, range::interval(0.0f, kPiF, true, false), "rad"),
         field("sensor_x_m", &Config::sensor_x_m, range::interval(-100.0f, 100.0f, false, false), "m",
               "the sensor's mount: ahead of the motion model's point"),
@@ -267,7 +268,7 @@ struct Config : Codec<Config> {
         field("tentative_isolated", &Config::tentative_isolated, range::one_of(0, 1), "",
               "tentative landmarks paired apart, updating only themselves"),
         field("joint_recheck", &Config::joint_recheck, range::one_of(0, 1)),
-        field("ambiguity_margin", &Config::ambiguity_margin, range::not_below(0.0f), "", "0: off"),
+        field("ambiguity_margin", &Config::ambiguity_margin, range::interval(0.0f, 1e6f, false, true), "", "0: off"),
         field("new_if_candidates_taken", &Config::new_if_candidates_taken, range::one_of(0, 1)),
         field("verify", &Config::verify, range::one_of(0, 1), "", "pairwise verification (PCJCBB: always)"),
         field("full_covariance_check", &Config::full_covariance_check, range::one_of(0, 1)),
