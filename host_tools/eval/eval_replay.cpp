@@ -1,0 +1,406 @@
+// geojcbb_eval replay: every chosen strategy on one log of the user's own (docs/replay.md),
+// reported as the simulation and the MRCLAM replay are (report.hpp), with the GPS score where the
+// log has fixes.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "geojcbb_host/eval_cli.hpp"
+#include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/event_log.hpp"
+#include "geojcbb_host/gps.hpp"
+#include "geojcbb_host/mrclam_replay.hpp"
+#include "geojcbb_host/report.hpp"
+#include "geojcbb_host/run_cli.hpp"
+#include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/svg_plot.hpp"
+
+namespace geojcbb::host {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The own-log replay (docs/replay.md): every chosen strategy on one log, reported as the
+// simulation and the MRCLAM replay are (report.hpp): Tables 1 and 2 (Table 2 and the summary only
+// when every measurement is labelled), pose and map, replay.csv, replay.json, replay_path.svg.
+struct ReplayOptions {
+  std::string log;
+  CommonFlags flags;       ///< --strategies, --truth, --out-dir, --jobs, --no-progress, --no-svg, the link
+  replay::LogNoise noise;  ///< 0: from the lines, or from the data
+  bool noise_from_data = false;
+  double noise_inflation = 1.5;
+  double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
+  bool known_map = false;
+  RunOptions run;
+  GpsOptions gps;      ///< the screening (the antenna from the log's meta)
+  RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
+};
+
+// The GPS table of a replay whose log has gps lines: per strategy the error of the estimated antenna
+// track at the screened fixes, the landmarks mapped, the mean NIS per pairing against its 95 %
+// bounds, and the replay's time.
+nlohmann::json gps_table(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg,
+                         const std::vector<GpsScore>& gps) {
+  nlohmann::json rows = nlohmann::json::array();
+  std::printf("\nGPS (the antenna's estimated track at each kept fix; %d fixes, %d rejected after a gap, %d jumps)\n",
+              gps.empty() ? 0 : gps[0].fixes, gps.empty() ? 0 : gps[0].after_gap, gps.empty() ? 0 : gps[0].jumps);
+  std::printf(
+      "| strategy | fixes used | RMSE [m] | max [m] (at t s) | landmarks | pairings | mean NIS [95 %% bounds] | time [s] |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    if (!agg[k].have_first) {
+      std::printf("| %s | failed: %s | | | | | | |\n", strategies[k].name().c_str(), agg[k].error.c_str());
+      rows.push_back({{"strategy", strategies[k].name()}, {"error", agg[k].error}});
+      continue;
+    }
+    const RunResult& r = agg[k].first;
+    const GpsScore& g = gps[k];
+    const double n = static_cast<double>(r.nis_pairings);
+    const double nis = n > 0 ? r.nis_sum / n : NAN, half = n > 0 ? 1.96 * 2 / std::sqrt(n) : NAN;  // mean of chi2(2)
+    std::printf("| %s | %d | %.2f | %.2f (%.0f) | %d | %ld | %.2f [%.2f, %.2f] | %.2f |\n",
+                strategies[k].name().c_str(), g.used, g.rmse_m, g.max_m, g.max_at_s, r.landmarks, r.nis_pairings, nis,
+                2 - half, 2 + half, agg[k].run_s);
+    rows.push_back({{"strategy", strategies[k].name()},
+                    {"fixes_used", g.used},
+                    {"fixes_unmatched", g.unmatched},
+                    {"rmse_m", g.rmse_m},
+                    {"max_m", g.max_m},
+                    {"max_at_s", g.max_at_s},
+                    {"landmarks", r.landmarks},
+                    {"not_augmented", r.not_augmented},
+                    {"pairings", r.nis_pairings},
+                    {"mean_nis", nis},
+                    {"nis_bounds", {2 - half, 2 + half}},
+                    {"time_s", agg[k].run_s}});
+  }
+  return rows;
+}
+
+// The path and map figure of a replay scored by GPS: the estimated antenna track over the kept fixes.
+svg::Panel gps_panel(const std::string& title, const RunResult& r, const std::vector<replay::GpsEvent>& fixes,
+                     const GpsOptions& o) {
+  svg::Panel p;
+  p.title = title;
+  p.xlabel = "x (east) [m]";
+  p.ylabel = "y (north) [m]";
+  p.equal_aspect = true;
+  GpsScore counts;
+  svg::Series g{"GPS fixes kept", {}, {}, svg::Style::kMarkersDot, "#000000"};
+  for (const replay::GpsEvent& f : screen_gps(fixes, o, counts)) {
+    g.x.push_back(f.x);
+    g.y.push_back(f.y);
+  }
+  svg::Series est{"estimated antenna track", {}, {}, svg::Style::kLine, "#D55E00"};
+  const std::size_t step = std::max<std::size_t>(1, r.trace.size() / svg::kMaxLinePoints);
+  for (std::size_t k = 0; k < r.trace.size(); k += step) {
+    const Eigen::Vector2d at = antenna_at(r.trace[k].pose, o);
+    est.x.push_back(at.x());
+    est.y.push_back(at.y());
+  }
+  svg::Series map{"landmarks mapped", {}, {}, svg::Style::kMarkersCircle, "#009E73"};
+  for (const MapLandmark& m : r.map) {
+    map.x.push_back(m.x);
+    map.y.push_back(m.y);
+  }
+  p.series = {g, est, map};
+  return p;
+}
+
+// replay.csv's columns of run_csv that a log cannot give: without labels (or streamed to a device)
+// the association scores and the map's spurious and duplicate landmarks; without truth lines the pose
+// error and ANEES; a log has no kidnap, so no relocalisation score. Left empty, never 0.
+std::set<std::string> unmeasured_columns(bool scored, bool have_truth) {
+  std::set<std::string> u{"relocalised_at_scan"};
+  if (!scored) {
+    u.insert({"tp", "tn", "fp", "fn", "precision", "recall", "f1", "spurious_in_map", "duplicates", "fp_clutter",
+              "group_f1"});
+  }
+  if (!have_truth) u.insert({"mean_abs_x_m", "mean_abs_y_m", "anees"});
+  return u;
+}
+
+// replay.csv's GPS columns (the GPS table's figures) and the mean NIS per pairing; empty where not
+// measured (no fixes in the log, a device run, no pairing).
+constexpr const char* kGpsColumns[] = {"gps_fixes_used", "gps_rmse_m", "gps_max_m", "gps_max_at_s", "mean_nis"};
+std::string gps_csv(const GpsScore* g, const RunResult& r) {
+  std::ostringstream o;  // run_csv's precision
+  if (g != nullptr && g->used > 0) {
+    o << ',' << g->used << ',' << g->rmse_m << ',' << g->max_m << ',' << g->max_at_s;
+  } else {
+    o << ",,,,";
+  }
+  o << ',';
+  if (r.nis_pairings > 0) o << r.nis_sum / static_cast<double>(r.nis_pairings);
+  return o.str();
+}
+
+int run_replay(const ReplayOptions& o) {
+  const replay::EventLog log = replay::read_event_log(o.log);
+  const bool labelled = log.labelled();
+  if (o.flags.oracle && !labelled) throw std::runtime_error("TRUTH (--truth) needs every measurement labelled");
+  replay::LogNoise noise;
+  std::string noise_from = "the command line and the log's lines";
+  if (o.noise_from_data) {
+    noise = replay::estimate_noise(log, o.noise_inflation);
+    noise_from = "the labelled data (robust spreads x " + std::to_string(o.noise_inflation).substr(0, 4) + ")";
+  }
+  if (o.noise.sigma_range_m > 0) noise.sigma_range_m = o.noise.sigma_range_m;
+  if (o.noise.sigma_bearing_rad > 0) noise.sigma_bearing_rad = o.noise.sigma_bearing_rad;
+  if (o.noise.sigma_v_mps > 0) noise.sigma_v_mps = o.noise.sigma_v_mps;
+  if (o.noise.sigma_w_radps > 0) noise.sigma_w_radps = o.noise.sigma_w_radps;
+  const replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
+  const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
+  RunOptions base = o.run;
+  base.record_trace = !log.gps.empty();
+  GpsOptions gps_opt = o.gps;
+  if (log.meta.count("gps_x_m")) gps_opt.antenna_x_m = log.meta.at("gps_x_m");
+  if (log.meta.count("gps_y_m")) gps_opt.antenna_y_m = log.meta.at("gps_y_m");
+  if (o.group_radius_m > 0) {
+    if (positions.empty()) throw std::runtime_error("--group-radius needs the landmark positions (landmark lines)");
+    base.landmark_group = replay::landmark_groups(positions, o.group_radius_m);
+  }
+  if (o.known_map) {
+    if (positions.empty()) throw std::runtime_error("--known-map needs the landmark positions (landmark lines)");
+    base.known_map = positions;
+  }
+  const std::vector<Method> strategies = select_methods(o.flags.strategies, true, o.flags.oracle);
+  if (o.runner && !log.gps.empty()) {
+    std::printf("GPS scoring needs the pose after every input, which a device does not report: not scored\n");
+  }
+  base.record_trace = base.record_trace && !o.runner;
+  fs::create_directories(o.flags.out_dir);
+  int scans = 0, predictions = 0, with_truth = 0;
+  for (const RunInput& in : source.inputs()) {
+    scans += in.scan;
+    predictions += !in.scan;
+    with_truth += in.scan && in.have_truth;
+  }
+  std::printf(
+      "== %s: %zu odom, %zu odom_delta, %zu meas, %zu truth, %zu gps, %zu landmark lines; %d scans (%d with a true "
+      "pose), %d predictions\n",
+      o.log.c_str(), log.odometry.size(), log.increments.size(), log.measurements.size(), log.truth.size(),
+      log.gps.size(), log.landmarks.size(), scans, with_truth, predictions);
+  {
+    auto g = [](double v, const char* unit) {
+      char b[48] = "not given";
+      if (v > 0) std::snprintf(b, sizeof b, "%.4g %s", v, unit);
+      return std::string(b);
+    };
+    std::printf(
+        "noise where a line gives none (from %s): sigma_range %s, sigma_bearing %s, sigma_v %s, sigma_w %s "
+        "(1-s means)\n",
+        noise_from.c_str(), g(noise.sigma_range_m, "m").c_str(), g(noise.sigma_bearing_rad, "rad").c_str(),
+        g(noise.sigma_v_mps, "m/s").c_str(), g(noise.sigma_w_radps, "rad/s").c_str());
+  }
+  if (!labelled) std::printf("measurements not labelled: no association scores (Table 2), timing and pose only\n");
+  if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
+
+  std::vector<RunAggregate> agg(strategies.size());
+  const double wall_s =
+      run_parallel(strategies.size(), o.runner ? 1 : o.flags.jobs, o.flags.progress, [&](std::size_t k) {
+        RunOptions ro = base;
+        strategies[k].apply(ro);
+        replay::LogSource src = source;  // each thread its own position
+        src.rewind();
+        const auto a = std::chrono::steady_clock::now();
+        try {
+          RunResult r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
+          agg[k].add(r, std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+          agg[k].first = std::move(r);
+          agg[k].have_first = true;
+        } catch (const std::exception& e) {
+          agg[k].fail(e.what());
+        }
+      });
+  std::vector<ReportRow> rows, group_rows;
+  int failures = 0;
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    ReportRow row = agg[k].row(strategies[k].name(), false, labelled && !o.runner);
+    if (with_truth == 0) row.abs_x = row.abs_y = row.anees = NAN;
+    rows.push_back(row);
+    group_rows.push_back(agg[k].group_row(strategies[k].name()));
+    failures += agg[k].failed;
+  }
+  print_tables(rows, stdout, labelled);
+  std::vector<GpsScore> gps(strategies.size());
+  nlohmann::json gps_rows;
+  if (!log.gps.empty() && !o.runner) {
+    for (std::size_t k = 0; k < strategies.size(); ++k)
+      if (agg[k].have_first) gps[k] = score_gps(agg[k].first.trace, log.gps, gps_opt);
+    gps_rows = gps_table(strategies, agg, gps);
+    std::ofstream e(o.flags.out_dir + "/gps_error.csv");  // per strategy and kept fix: time and error
+    e << "strategy,t_s,error_m\n";
+    for (std::size_t k = 0; k < strategies.size(); ++k)
+      for (std::size_t i = 0; i < gps[k].t.size(); ++i)
+        e << strategies[k].name() << ',' << gps[k].t[i] << ',' << gps[k].error_m[i] << '\n';
+    if (!e) throw std::runtime_error("cannot write " + o.flags.out_dir + "/gps_error.csv");
+  }
+  if (labelled) {
+    print_summary(rows, group_rows, stdout, "run");
+    if (o.group_radius_m > 0) {
+      std::printf("Table 2 at landmark-group level (landmarks within %.2f m form a group)\n", o.group_radius_m);
+      print_accuracy(group_rows, stdout);
+    }
+  }
+  // Files: one CSV row per strategy, the summary, the path and map figure.
+  {
+    std::ofstream csv(o.flags.out_dir + "/replay.csv");
+    const std::set<std::string> unmeasured = unmeasured_columns(labelled && !o.runner, with_truth > 0);
+    const bool scored_gps = !log.gps.empty() && !o.runner;
+    csv << "log,strategy";
+    for (const std::string& c : run_csv_columns()) csv << ',' << c;
+    for (const char* c : kGpsColumns) csv << ',' << c;
+    csv << ",error\n";
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      csv << csv_escape(o.log) << ',' << strategies[k].name();
+      if (agg[k].have_first) {
+        const RunResult& r = agg[k].first;
+        for (const std::string& c : run_csv_columns()) {
+          csv << ',' << (unmeasured.count(c) != 0 ? std::string() : run_csv(r, agg[k].run_s, {c}));
+        }
+        csv << gps_csv(scored_gps ? &gps[k] : nullptr, r) << ",\n";
+      } else {
+        csv << std::string(run_csv_columns().size() + std::size(kGpsColumns), ',') << ',' << csv_escape(agg[k].error)
+            << '\n';
+      }
+    }
+    nlohmann::json js;
+    js["log"] = o.log;
+    js["labelled"] = labelled;
+    js["scans"] = scans;
+    js["scans_with_truth"] = with_truth;
+    js["noise"] = {{"from", noise_from},
+                   {"sigma_range_m", noise.sigma_range_m},
+                   {"sigma_bearing_rad", noise.sigma_bearing_rad},
+                   {"sigma_v_mps", noise.sigma_v_mps},
+                   {"sigma_w_radps", noise.sigma_w_radps}};
+    js["wall_s"] = wall_s;
+    js["strategies"] = rows_json(rows);
+    // As in replay.csv, a score the log cannot give is null, never 0.
+    static const char* const kLabelScores[] = {"accuracy",
+                                               "f1",
+                                               "precision",
+                                               "recall",
+                                               "tp",
+                                               "tn",
+                                               "fp",
+                                               "fn",
+                                               "false_pairs_in_group",
+                                               "false_pairs_other_group",
+                                               "false_pairs_to_duplicate",
+                                               "false_pairs_to_original",
+                                               "spurious_in_map",
+                                               "runs_over_5_false_pairs",
+                                               "false_relocalisations"};
+    for (nlohmann::json& row : js["strategies"]) {
+      if (!(labelled && !o.runner)) {
+        for (const char* key : kLabelScores) {
+          if (row.contains(key)) row[key] = nullptr;
+        }
+      }
+      if (with_truth == 0) {
+        for (const char* key : {"nees_inside", "pose_error_after_kidnap_m"}) {
+          if (row.contains(key)) row[key] = nullptr;
+        }
+      }
+    }
+    if (o.group_radius_m > 0) js["group_level"] = rows_json(group_rows);
+    if (!log.gps.empty() && !o.runner) {
+      js["gps"] = {{"fixes", gps[0].fixes},
+                   {"rejected_after_gap", gps[0].after_gap},
+                   {"rejected_jumps", gps[0].jumps},
+                   {"max_gap_s", gps_opt.max_gap_s},
+                   {"max_jump_m", gps_opt.max_jump_m},
+                   {"antenna", {gps_opt.antenna_x_m, gps_opt.antenna_y_m}},
+                   {"strategies", gps_rows}};
+    }
+    std::ofstream(o.flags.out_dir + "/replay.json") << js.dump(2) << '\n';
+    if (!csv) throw std::runtime_error("cannot write " + o.flags.out_dir + "/replay.csv");
+  }
+  if (o.flags.svg) {
+    svg::Figure path;
+    path.title = "Path and map, " + fs::path(o.log).filename().string();
+    path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      if (!agg[k].have_first) continue;
+      if (log.gps.empty() || o.runner) {
+        path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
+      } else {
+        char t[96];
+        std::snprintf(t, sizeof t, "%s: GPS RMSE %.2f m, %d landmarks", strategies[k].name().c_str(), gps[k].rmse_m,
+                      agg[k].first.landmarks);
+        path.panels.push_back(gps_panel(t, agg[k].first, log.gps, gps_opt));
+      }
+    }
+    svg::write(path, o.flags.out_dir + "/replay_path.svg");
+  }
+  std::printf("\n%zu replays in %.1f s; per-strategy rows: %s/replay.csv, summary: %s/replay.json%s\n",
+              strategies.size(), wall_s, o.flags.out_dir.c_str(), o.flags.out_dir.c_str(),
+              o.flags.svg ? (", figure: " + o.flags.out_dir + "/replay_path.svg").c_str() : "");
+  if (failures > 0) std::fprintf(stderr, "%d replays failed (see the tables)\n", failures);
+  return failures > 0 ? 1 : 0;
+}
+}  // namespace
+
+Subcommand add_replay_command(CLI::App& app) {
+  auto o = std::make_shared<ReplayOptions>();
+  o->flags.out_dir = "build/results/replay";
+  CLI::App* rp =
+      app.add_subcommand("replay",
+                         "replay your own log (docs/replay.md): every strategy, scored when the measurements "
+                         "are labelled; tables, replay.csv, replay.json and the path/map figure");
+  rp->add_option("--log", o->log, "the log file (CSV, docs/replay.md)")->required();
+  add_common_flags(*rp, o->flags, kAllCommonFlags, "replay.csv, replay.json and replay_path.svg", "replay");
+  add_noise_flags(*rp,
+                  {&o->noise.sigma_range_m, &o->noise.sigma_bearing_rad, &o->noise.sigma_v_mps, &o->noise.sigma_w_radps,
+                   &o->noise_inflation},
+                  " where a line gives none");
+  rp->add_flag("--noise-from-data", o->noise_from_data,
+               "estimate the noise from the labelled measurements, truth and landmark lines (robust spreads; a "
+               "--sigma-* given overrides its part)");
+  rp->add_option("--group-radius", o->group_radius_m,
+                 "landmarks within this distance [m] form a group, for a group-level score (0: none)")
+      ->default_val(0.0)
+      ->check(CLI::Range(0.0, 1000.0));
+  rp->add_flag("--known-map", o->known_map, "localisation only: the landmark lines are the map (std 1 cm, fixed)");
+  auto mrclam_rules = std::make_shared<bool>(false);
+  rp->add_flag("--mrclam-rules", *mrclam_rules,
+               "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "
+               "0.03 rad) where not given");
+  rp->add_option("--gps-max-gap", o->gps.max_gap_s, "a GPS fix after a longer dropout is not scored [s]")
+      ->default_val(o->gps.max_gap_s)
+      ->check(CLI::Range(0.0, 1e6));
+  rp->add_option("--gps-max-jump", o->gps.max_jump_m, "a GPS fix farther from the previous one is not scored [m]")
+      ->default_val(o->gps.max_jump_m)
+      ->check(CLI::Range(0.0, 1e6));
+  add_run_options(*rp, o->run);
+  return {rp, [o, mrclam_rules, rp]() {
+            if (*mrclam_rules) {
+              const RunOptions m = mrclam_run_defaults();
+              if (rp->count("--miss-probability") == 0) o->run.step.miss_probability = m.step.miss_probability;
+              if (rp->count("--static-gate-level") == 0) o->run.step.static_gate_level = m.step.static_gate_level;
+              if (rp->count("--new-if-taken") == 0)
+                o->run.step.new_if_candidates_taken = m.step.new_if_candidates_taken;
+              if (rp->count("--occlusion") == 0) o->run.step.occlusion_rad = m.step.occlusion_rad;
+            }
+            o->flags.progress = progress_bar(o->flags);
+            return with_device(o->flags.link, o->flags.oracle, o->known_map,
+                               [&](const RunInputsFn& runner, const std::string&) {
+                                 o->runner = runner;
+                                 return run_replay(*o);
+                               });
+          }};
+}
+
+}  // namespace geojcbb::host

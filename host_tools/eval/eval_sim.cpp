@@ -1,0 +1,265 @@
+// geojcbb_eval sim: Monte Carlo EKF-SLAM runs over simulated scenarios (default env1 and env2, 20
+// runs each, every strategy on the same seeds): Table 1 (association time), Table 2 (TP/TN/FP/FN,
+// precision, recall, F1, accuracy), x/y pose error, NEES with its 95 % bounds; runs.csv,
+// summary.json and SVG figures (path fitting, x/y error over time, F1 per strategy, NEES over time).
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "geojcbb_host/eval_cli.hpp"
+#include "geojcbb_host/eval_report.hpp"
+#include "geojcbb_host/report.hpp"
+#include "geojcbb_host/run_cli.hpp"
+#include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/svg_plot.hpp"
+
+namespace geojcbb::host {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Per (scenario, strategy): sums over the runs (report.hpp, the reporting path shared with the
+// MRCLAM replay and the own-log replay).
+using Cell = RunAggregate;
+
+// runs.csv's columns after scenario, strategy, seed (report.hpp: run_csv).
+const std::vector<std::string> kSimCsvColumns{"scans",
+                                              "observations",
+                                              "tp",
+                                              "tn",
+                                              "fp",
+                                              "fn",
+                                              "f1",
+                                              "association_s",
+                                              "run_s",
+                                              "mean_abs_x_m",
+                                              "mean_abs_y_m",
+                                              "landmarks",
+                                              "spurious_in_map",
+                                              "budget_hits",
+                                              "relocalised_at_scan",
+                                              "anees"};
+
+struct SimOptions {
+  std::vector<std::string> scenarios;
+  int runs = 20;
+  std::uint64_t seed = 1;
+  CommonFlags flags;  ///< --strategies, --truth, --out-dir, --jobs, --no-progress, --no-svg, the link
+  RunOptions run;
+  RunInputsFn runner;       ///< empty: in process
+  std::string device_info;  ///< the device the runs were streamed to (empty: in process)
+};
+
+int run_sim(const SimOptions& o) {
+  const std::vector<Method> strategies = select_methods(o.flags.strategies, true, o.flags.oracle);
+  std::vector<Scenario> scenarios;
+  for (const std::string& p : o.scenarios) scenarios.push_back(load_scenario(p));
+  fs::create_directories(o.flags.out_dir);
+
+  struct Job {
+    int sc, st, run;
+  };
+  std::vector<Job> jobs;
+  for (int run = 0; run < o.runs; ++run)  // seed-major: a partial result is still balanced
+    for (std::size_t sc = 0; sc < scenarios.size(); ++sc)
+      for (std::size_t st = 0; st < strategies.size(); ++st) jobs.push_back({int(sc), int(st), run});
+  std::vector<std::vector<Cell>> cells(scenarios.size(), std::vector<Cell>(strategies.size()));
+  struct RunRow {
+    int sc, st, run;
+    RunResult r;
+    double run_s;
+  };
+  std::vector<std::string> csv_rows(jobs.size());
+  std::mutex mu;
+  const int threads = o.runner           ? 1  // one device, one run at a time
+                      : o.flags.jobs > 0 ? o.flags.jobs
+                                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const double wall_s = run_parallel(jobs.size(), threads, o.flags.progress, [&](std::size_t j) {
+    const Job& jb = jobs[j];
+    RunOptions ro = o.run;
+    strategies[jb.st].apply(ro);
+    const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(jb.run);
+    const auto a = std::chrono::steady_clock::now();
+    RunResult r;
+    std::string err;
+    try {
+      SimSource src(scenarios[jb.sc], seed, ro.max_steps);
+      r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
+    } catch (const std::exception& e) {
+      err = e.what();
+    }
+    const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+    std::lock_guard<std::mutex> lock(mu);
+    Cell& c = cells[jb.sc][jb.st];
+    if (!err.empty()) {
+      c.fail(err);
+    } else {
+      const double kidnap = scenarios[jb.sc].kidnap_t_s;
+      c.add(r, run_s, kidnap);
+      csv_rows[j] = csv_escape(scenarios[jb.sc].name) + ',' + strategies[jb.st].name() + ',' + std::to_string(seed) +
+                    ',' + run_csv(r, run_s, kSimCsvColumns, kidnap);
+      if (jb.run == 0) {
+        c.first = std::move(r);
+        c.have_first = true;
+      }
+    }
+  });
+
+  // Report.
+  nlohmann::json js;
+  js["runs_per_strategy"] = o.runs;
+  js["first_seed"] = o.seed;
+  js["threads"] = threads;
+  js["wall_s"] = wall_s;
+  if (!o.device_info.empty()) js["device"] = o.device_info;
+  int failures = 0;
+  double lo = 0, hi = 0;
+  const bool have_bounds =
+      chi2_inv(0.025, 3 * o.runs, lo) == Status::kOk && chi2_inv(0.975, 3 * o.runs, hi) == Status::kOk;
+  std::vector<std::vector<double>> f1(strategies.size(), std::vector<double>(scenarios.size(), NAN));
+  for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
+    const Scenario& s = scenarios[sc];
+    std::vector<ReportRow> rows;
+    for (std::size_t st = 0; st < strategies.size(); ++st) {
+      const Cell& c = cells[sc][st];
+      failures += c.failed;
+      const ReportRow row = c.row(strategies[st].name(), true, !o.runner);
+      f1[st][sc] = c.score.f1();
+      rows.push_back(row);
+    }
+    const int scans = cells[sc][0].runs ? cells[sc][0].scans / cells[sc][0].runs : 0;
+    std::printf("\n== %s: %d runs per strategy (seeds %llu..%llu), %d scans per run\n", s.name.c_str(), o.runs,
+                static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1), scans);
+    print_tables(rows, stdout);
+    js["scenarios"].push_back({{"name", s.name}, {"file", o.scenarios[sc]}, {"strategies", rows_json(rows)}});
+
+    if (o.flags.svg) {
+      const std::string stem = o.flags.out_dir + "/" + fs::path(o.scenarios[sc]).stem().string();
+      svg::Figure path;
+      path.title = "Path fitting, " + s.name + " (seed " + std::to_string(o.seed) + ")";
+      path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
+      svg::Figure err;
+      err.title = "Mean absolute pose error over " + std::to_string(o.runs) + " runs, " + s.name;
+      err.cols = 1;
+      err.panel_w = 900;
+      err.share_x = true;
+      err.panels.resize(2);
+      err.panels[0] = {"x error", "", "|x error| [m]", {}, false, {}, {}};
+      err.panels[1] = {"y error", "time [s]", "|y error| [m]", {}, false, {}, {}};
+      svg::Figure nees;
+      nees.title = "Pose NEES, mean over " + std::to_string(o.runs) + " runs: " + s.name;
+      nees.panel_w = 900;
+      nees.panels.resize(1);
+      nees.panels[0] = {"", "time [s]", "NEES (3 dof)", {}, false, {}, {}};
+      for (std::size_t st = 0; st < strategies.size(); ++st) {
+        const Cell& c = cells[sc][st];
+        if (!c.have_first) continue;
+        std::vector<Eigen::Vector2d> truth_map(s.landmarks.begin(), s.landmarks.end());
+        const svg::Panel p = path_map_panel(strategies[st].name(), c.first, truth_map);
+        path.panels.push_back(p);
+        const std::string name = strategies[st].name();
+        svg::Series sx{name, c.t, {}, svg::Style::kLine, ""}, sy{name, c.t, {}, svg::Style::kLine, ""};
+        svg::Series sn{name, c.t, {}, svg::Style::kLine, ""};
+        for (std::size_t k = 0; k < c.t.size(); ++k) {
+          sx.y.push_back(c.ex_sum[k] / c.runs);
+          sy.y.push_back(c.ey_sum[k] / c.runs);
+          sn.y.push_back(c.nees_sum[k] / c.runs);
+        }
+        err.panels[0].series.push_back(sx);
+        err.panels[1].series.push_back(sy);
+        nees.panels[0].series.push_back(sn);
+      }
+      if (have_bounds && !cells[sc][0].t.empty()) {
+        const auto& t = cells[sc][0].t;
+        nees.panels[0].series.push_back(
+            {"95 % bounds", t, std::vector<double>(t.size(), lo / o.runs), svg::Style::kDashed, "#000000"});
+        nees.panels[0].series.push_back(
+            {"", t, std::vector<double>(t.size(), hi / o.runs), svg::Style::kDashed, "#000000"});
+      }
+      svg::write(path, stem + "_path.svg");
+      svg::write(err, stem + "_error.svg");
+      svg::write(nees, stem + "_nees.svg");
+      std::printf("figures: %s_path.svg, %s_error.svg, %s_nees.svg\n", stem.c_str(), stem.c_str(), stem.c_str());
+    }
+  }
+  if (o.flags.svg) {
+    svg::BarChart bars;
+    bars.title = "F1 per strategy (" + std::to_string(o.runs) + " runs each)";
+    bars.ylabel = "F1";
+    for (const Method& st : strategies) bars.categories.push_back(st.name());
+    for (const Scenario& s : scenarios) bars.groups.push_back(s.name.substr(0, s.name.find(':')));
+    bars.values.assign(scenarios.size(), std::vector<double>(strategies.size(), NAN));
+    double fmin = 1.0;
+    for (std::size_t st = 0; st < strategies.size(); ++st)
+      for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
+        bars.values[sc][st] = f1[st][sc];
+        if (std::isfinite(f1[st][sc])) fmin = std::min(fmin, f1[st][sc]);
+      }
+    bars.y_range = svg::Range{std::floor(fmin * 50 - 1) / 50, 1.0};
+    bars.value_decimals = 4;
+    svg::write(bars, o.flags.out_dir + "/f1.svg");
+    std::printf("figure: %s/f1.svg\n", o.flags.out_dir.c_str());
+  }
+  {
+    std::ofstream csv(o.flags.out_dir + "/runs.csv");
+    csv << "scenario,strategy,seed";
+    for (const std::string& col : kSimCsvColumns) csv << ',' << col;
+    csv << '\n';
+    for (const std::string& r : csv_rows)
+      if (!r.empty()) csv << r << '\n';
+    std::ofstream(o.flags.out_dir + "/summary.json") << js.dump(2) << '\n';
+    if (!csv) throw std::runtime_error("cannot write " + o.flags.out_dir + "/runs.csv");
+  }
+  std::printf(
+      "\n%zu runs in %.1f s on %d threads; per-run rows: %s/runs.csv, "
+      "summary: %s/summary.json\n",
+      jobs.size(), wall_s, threads, o.flags.out_dir.c_str(), o.flags.out_dir.c_str());
+  if (failures > 0) std::fprintf(stderr, "%d runs failed (see the tables)\n", failures);
+  return failures > 0 ? 1 : 0;
+}
+}  // namespace
+
+Subcommand add_sim_command(CLI::App& app) {
+  auto o = std::make_shared<SimOptions>();
+  o->flags.out_dir = "build/results/eval";
+  CLI::App* sim =
+      app.add_subcommand("sim", "Monte Carlo runs over simulated scenarios: Tables 1 and 2, pose error, NEES, figures");
+  sim->add_option("--scenario", o->scenarios,
+                  "scenario JSON file(s) (default: env1 and env2 from host_tools/scenarios)");
+  sim->add_option("--runs", o->runs, "Monte Carlo runs per scenario and strategy (seeds seed .. seed+runs-1)")
+      ->default_val(20)
+      ->check(CLI::Range(1, 100000));
+  sim->add_option("--seed", o->seed, "first seed")->default_val(1);
+  add_common_flags(*sim, o->flags, kAllCommonFlags, "runs.csv, summary.json and the SVG figures", "run");
+  sim->add_option("--max-steps", o->run.max_steps,
+                  "stop each run after this many control intervals (0: the whole path)")
+      ->default_val(0);
+  add_run_options(*sim, o->run);
+  return {sim, [o]() {
+            if (o->scenarios.empty()) {
+              o->scenarios = {std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json",
+                              std::string(GEOJCBB_SCENARIO_DIR) + "/env2.json"};
+            }
+            o->flags.progress = progress_bar(o->flags);
+            return with_device(o->flags.link, o->flags.oracle, false,
+                               [&](const RunInputsFn& runner, const std::string& info) {
+                                 o->runner = runner;
+                                 o->device_info = info;
+                                 return run_sim(*o);
+                               });
+          }};
+}
+
+}  // namespace geojcbb::host
