@@ -11,6 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geojcbb/core/diagnostics.h"
 #include "geojcbb/core/options.h"
 
 #ifdef __cplusplus
@@ -90,19 +91,15 @@ typedef struct geojcbb_settings {
 
 void geojcbb_settings_default(geojcbb_settings* s);
 
-/* Mirrors geojcbb::AssociationDiagnostics. */
+/* Mirrors geojcbb::AssociationDiagnostics: one member per line of core/diagnostics.h (a bool as
+ * uint8_t 0/1). */
+#define GEOJCBB_C_DIAG_U32 uint32_t
+#define GEOJCBB_C_DIAG_U16 uint16_t
+#define GEOJCBB_C_DIAG_U8 uint8_t
+#define GEOJCBB_C_DIAG_BOOL uint8_t
+#define GEOJCBB_C_DIAG_MEMBER(TYPE, name, doc) GEOJCBB_C_DIAG_##TYPE name;
 typedef struct geojcbb_diagnostics {
-  uint32_t jcbb_nodes;
-  uint16_t candidates_in_region;
-  uint16_t compatible_pairs;
-  uint8_t node_budget_hit; /* bool */
-  uint8_t groups;
-  uint16_t cluster_iterations;
-  uint8_t cluster_bound_hit; /* bool */
-  uint16_t merge_conflicts;
-  uint8_t recheck_failed; /* bool */
-  uint16_t recheck_dropped;
-  uint16_t declined;
+  GEOJCBB_DIAGNOSTICS(GEOJCBB_C_DIAG_MEMBER)
 } geojcbb_diagnostics;
 
 /* Mirrors geojcbb::Association<float, DefaultBounds>. */

@@ -90,19 +90,12 @@ bool storage_ok(const void* p, std::size_t size, std::size_t need) {
 
 bool strategy_ok(int s) { return s >= 0 && s < kStrategyCount; }
 
+/// Generated from core/diagnostics.h: every diagnostic, a bool as 0/1.
 geojcbb_diagnostics to_c(const AssociationDiagnostics& d) {
   geojcbb_diagnostics c;
-  c.jcbb_nodes = d.jcbb_nodes;
-  c.candidates_in_region = d.candidates_in_region;
-  c.compatible_pairs = d.compatible_pairs;
-  c.node_budget_hit = d.node_budget_hit ? 1 : 0;
-  c.groups = d.groups;
-  c.cluster_iterations = d.cluster_iterations;
-  c.cluster_bound_hit = d.cluster_bound_hit ? 1 : 0;
-  c.merge_conflicts = d.merge_conflicts;
-  c.recheck_failed = d.recheck_failed ? 1 : 0;
-  c.recheck_dropped = d.recheck_dropped;
-  c.declined = d.declined;
+#define GEOJCBB_DIAG_TO_C(TYPE, name, doc) c.name = options::convert<decltype(c.name)>(d.name);
+  GEOJCBB_DIAGNOSTICS(GEOJCBB_DIAG_TO_C)
+#undef GEOJCBB_DIAG_TO_C
   return c;
 }
 

@@ -302,7 +302,8 @@ int run_replay(const ReplayOptions& o) {
                                                "false_pairs_to_original",
                                                "spurious_in_map",
                                                "runs_over_5_false_pairs",
-                                               "false_relocalisations"};
+                                               "false_relocalisations",
+                                               "false_pairs_to_clutter"};
     for (nlohmann::json& row : js["strategies"]) {
       if (!(labelled && !o.runner)) {
         for (const char* key : kLabelScores) {

@@ -26,22 +26,10 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   ++runs;
   scans += r.scans;
   observations += r.observations;
-  budget_hits += r.budget_hits;
-  fp_clutter += r.fp_clutter;
-  fp_to_duplicate += r.fp_to_duplicate;
-  fp_to_original += r.fp_to_original;
-  fp_in_group += r.fp_in_group;
-  fp_other_group += r.fp_other_group;
+#define GEOJCBB_RUN_COUNTER_SUM(name, key, doc) name += r.name;
+  GEOJCBB_RUN_COUNTERS(GEOJCBB_RUN_COUNTER_SUM)
+#undef GEOJCBB_RUN_COUNTER_SUM
   runs_over_5_fp += r.score.fp > 5;
-  loop_commits += r.loop_commits;
-  loop_held_scans += r.loop_held_scans;
-  windows += r.windows;
-  window_commits += r.window_commits;
-  window_held_scans += r.window_held_scans;
-  regrouped += r.regrouped;
-  merges += r.merges;
-  not_augmented += r.not_augmented;
-  evicted += r.evicted;
   full_runs += r.not_augmented > 0 || r.evicted > 0;
   landmarks += r.landmarks;
   spurious_in_map += r.spurious_in_map;
@@ -88,8 +76,9 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.scans = scans;
   row.assoc_s = assoc_s;
   row.run_s = run_s;
-  row.budget_hits = budget_hits;
-  row.fp_clutter = fp_clutter;
+#define GEOJCBB_RUN_COUNTER_COPY(name, key, doc) row.name = name;
+  GEOJCBB_RUN_COUNTERS(GEOJCBB_RUN_COUNTER_COPY)
+#undef GEOJCBB_RUN_COUNTER_COPY
   if (!scan_ms.empty()) {
     std::vector<double> ms = scan_ms;
     std::sort(ms.begin(), ms.end());
@@ -100,20 +89,7 @@ ReportRow RunAggregate::row(const std::string& name, bool monte_carlo, bool map_
   row.reloc_runs = reloc_runs;
   row.reloc_found3 = reloc_found3;
   row.reloc_false = reloc_false;
-  row.fp_to_duplicate = fp_to_duplicate;
-  row.fp_to_original = fp_to_original;
-  row.fp_in_group = fp_in_group;
-  row.fp_other_group = fp_other_group;
   row.runs_over_5_fp = runs_over_5_fp;
-  row.loop_commits = loop_commits;
-  row.loop_held_scans = loop_held_scans;
-  row.windows = windows;
-  row.window_commits = window_commits;
-  row.regrouped = regrouped;
-  row.window_held_scans = window_held_scans;
-  row.merges = merges;
-  row.not_augmented = not_augmented;
-  row.evicted = evicted;
   row.full_runs = full_runs;
   if (reloc_runs > 0) {
     row.reloc_error_m = reloc_error_m / reloc_runs;

@@ -105,19 +105,10 @@ void load_observations(const Arr& z, const Arr& R, Observations<T, PyBounds>& ob
   }
 }
 
+// Every diagnostic of core/diagnostics.h, by its name.
 py::dict diagnostics(const AssociationDiagnostics& d) {
   py::dict o;
-  o["jcbb_nodes"] = d.jcbb_nodes;
-  o["candidates_in_region"] = d.candidates_in_region;
-  o["compatible_pairs"] = d.compatible_pairs;
-  o["node_budget_hit"] = d.node_budget_hit;
-  o["groups"] = d.groups;
-  o["cluster_iterations"] = d.cluster_iterations;
-  o["cluster_bound_hit"] = d.cluster_bound_hit;
-  o["merge_conflicts"] = d.merge_conflicts;
-  o["recheck_failed"] = d.recheck_failed;
-  o["recheck_dropped"] = d.recheck_dropped;
-  o["declined"] = d.declined;
+  for_each_diagnostic(d, [&o](const char* name, const char*, auto v) { o[name] = v; });
   return o;
 }
 

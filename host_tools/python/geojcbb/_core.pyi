@@ -22,6 +22,8 @@ class GeojcbbError(RuntimeError):
 
 
 class Diagnostics(TypedDict):
+    """What one association call reports about itself, one key per line of
+    firmware_lib/include/geojcbb/core/diagnostics.h."""
     jcbb_nodes: int
     candidates_in_region: int
     compatible_pairs: int
@@ -33,6 +35,15 @@ class Diagnostics(TypedDict):
     recheck_failed: bool
     recheck_dropped: int
     declined: int
+    verify_dropped: int
+    seed_tried: bool
+    seed_used: bool
+    seed_pairings: int
+    clique_graph_nodes: int
+    clique_search_nodes: int
+    clique_budget_hit: bool
+    clique_nodes_truncated: bool
+    rjc_used: bool
 
 
 class Options(TypedDict, total=False):

@@ -171,6 +171,19 @@ def test_options_are_the_table_and_the_stubs_list_them():
         assert o["name"] in geojcbb.associate.__doc__ and o["name"] in geojcbb.Slam.__init__.__doc__
 
 
+def test_diagnostics_are_the_table_and_the_stubs_list_them():
+    import ast
+    rng = np.random.default_rng(2)
+    z, R, h, C, ids = make_scene(rng, 6, 6)
+    diag = geojcbb.associate(z, R, h, C, ids, strategy="PCJCBB")["diagnostics"]
+    stub = ast.parse(open(os.path.join(os.path.dirname(geojcbb.__file__), "_core.pyi")).read())
+    cls = next(n for n in stub.body if isinstance(n, ast.ClassDef) and n.name == "Diagnostics")
+    types = {n.target.id: n.annotation.id for n in cls.body if isinstance(n, ast.AnnAssign)}
+    assert list(diag) == list(types)  # every diagnostic of core/diagnostics.h, in its order
+    for name, value in diag.items():
+        assert type(value).__name__ == types[name], name
+
+
 def test_every_option_is_a_keyword_and_its_range_is_enforced():
     rng = np.random.default_rng(5)
     z, R, h, C, ids = make_scene(rng, 4, 4)

@@ -8,8 +8,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "geojcbb/core/capacity.hpp"
+#include "geojcbb/core/diagnostics.h"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/status.hpp"
 
@@ -154,31 +156,32 @@ struct Prediction {
   JointCovariance<T, B> C;                      ///< H P H^T, candidate j at rows 2j, 2j+1 (packed)
 };
 
-/// Per-call counters (as MAVLink keeps mavlink_status_t).
+/// The C++ type of each TYPE of core/diagnostics.h.
+namespace diagnostic_types {
+using U32 = std::uint32_t;
+using U16 = std::uint16_t;
+using U8 = std::uint8_t;
+using BOOL = bool;
+}  // namespace diagnostic_types
+
+/// What one association call reports about itself (per-call counters, as MAVLink keeps
+/// mavlink_status_t): one member per line of core/diagnostics.h, in its order.
 struct AssociationDiagnostics {
-  NodeCount jcbb_nodes = 0;                ///< interpretation-tree nodes expanded
-  std::uint16_t candidates_in_region = 0;  ///< candidates left after the local region (eq. 5)
-  std::uint16_t compatible_pairs = 0;      ///< (observation, candidate) pairs passing the individual gate
-  bool node_budget_hit = false;            ///< JCBB stopped at its node budget: best-so-far returned
-  std::uint8_t groups = 0;                 ///< observation groups searched
-  std::uint16_t cluster_iterations = 0;    ///< k-means or EM iterations (EM: over every BIC fit)
-  /// The clustering stopped at its iteration bound before converging (k-means, EM), or DBSCAN
-  /// merged groups beyond MaxGroups.
-  bool cluster_bound_hit = false;
-  std::uint16_t merge_conflicts = 0;      ///< features claimed by two groups (mutual exclusion)
-  bool recheck_failed = false;            ///< the merged union failed the joint test and was repaired
-  std::uint16_t recheck_dropped = 0;      ///< pairings the repair removed
-  std::uint16_t declined = 0;             ///< pairings left kUnmatched as ambiguous (ambiguity_margin)
-  std::uint16_t verify_dropped = 0;       ///< pairings the verification dropped (not pairwise consistent)
-  bool seed_tried = false;                ///< the pose was uncertain: the pose-free clique was computed
-  bool seed_used = false;                 ///< the clique passed the joint test and seeded the search
-  std::uint16_t seed_pairings = 0;        ///< pairings of the clique (when tried)
-  std::uint16_t clique_graph_nodes = 0;   ///< graph nodes of the last consistency graph (seed or verify)
-  std::uint32_t clique_search_nodes = 0;  ///< max-clique search nodes, seed and verify together
-  bool clique_budget_hit = false;         ///< a max-clique search stopped at its budget (best so far used)
-  bool clique_nodes_truncated = false;    ///< the seed's wide gate passed more pairings than graph nodes
-  bool rjc_used = false;                  ///< the scan was searched by RJC (cfg.rjc and a large scan)
+#define GEOJCBB_DIAG_MEMBER(TYPE, name, doc) diagnostic_types::TYPE name = 0;
+  GEOJCBB_DIAGNOSTICS(GEOJCBB_DIAG_MEMBER)
+#undef GEOJCBB_DIAG_MEMBER
 };
+static_assert(std::is_same<decltype(AssociationDiagnostics::jcbb_nodes), NodeCount>::value,
+              "jcbb_nodes counts JCBB nodes");
+
+/// Calls f(name, meaning, value) for every diagnostic of d, in the table's order (C, Python, the
+/// tools). Bound: the table's lines.
+template <typename D, typename F>
+void for_each_diagnostic(D& d, F&& f) {
+#define GEOJCBB_DIAG_VISIT(TYPE, name, doc) f(#name, doc, d.name);
+  GEOJCBB_DIAGNOSTICS(GEOJCBB_DIAG_VISIT)
+#undef GEOJCBB_DIAG_VISIT
+}
 
 template <typename T, class B>
 struct Association {

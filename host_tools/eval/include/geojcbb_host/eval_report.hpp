@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "geojcbb_host/run_counters.hpp"
 #include "geojcbb_host/scene.hpp"
 
 namespace geojcbb::host {
@@ -23,8 +24,9 @@ struct ReportRow {
   int runs = 0, failed = 0;
   std::string error;  ///< of the last failed run
   Score score;
-  int scans = 0, budget_hits = 0;
-  double assoc_s = 0, run_s = 0;  ///< sums over the runs
+  int scans = 0;
+  GEOJCBB_RUN_COUNTERS(GEOJCBB_RUN_COUNTER_MEMBER)  ///< sums over the runs
+  double assoc_s = 0, run_s = 0;                    ///< sums over the runs
   double abs_x = NAN,
          abs_y = NAN;                             ///< mean absolute pose error [m], mean over runs
   double landmarks = NAN, spurious_in_map = NAN;  ///< at the end, mean over runs
@@ -32,21 +34,13 @@ struct ReportRow {
          anees_hi = NAN;     ///< time-averaged NEES and its 95 % bounds
   double nees_inside = NAN;  ///< fraction of scans whose run-averaged NEES is
                              ///< inside its 95 % bounds
-  int fp_clutter = 0;        ///< FP that paired clutter (sum over the runs)
   double duplicates = NAN;   ///< map landmarks beyond one per true landmark, at the end, mean over runs
   double ms_median = NAN, ms_p90 = NAN, ms_max = NAN;  ///< per-scan association time over every scan [ms]
   int reloc_runs = 0, reloc_found3 = 0;                ///< kidnap scenes: runs, and runs relocalised within 3 scans
   int reloc_false = 0;                                 ///< runs with a false relocalisation
-  int fp_to_duplicate = 0, fp_to_original = 0;         ///< false pairs to a duplicate / to an original landmark
-  int fp_in_group = 0, fp_other_group = 0;             ///< false pairs of a landmark: within its group / elsewhere
   int runs_over_5_fp = 0;                              ///< runs with more than 5 false pairs
-  int loop_commits = 0, loop_held_scans = 0;           ///< closure check: closures committed, scans held
-  int windows = 0, window_commits = 0, window_held_scans = 0;  ///< hypothesis windows: opened, committed, scans open
-  int regrouped = 0;                                           ///< observations cluster_first paired anew
-  int merges = 0;                                              ///< duplicates merged after closures (loop_merge_d2)
-  int not_augmented = 0, full_runs = 0;  ///< observations not added (the map full), and runs whose map filled
-  int evicted = 0;                       ///< landmarks evicted to make room (evict_when_full)
-  double reloc_error_m = NAN;            ///< mean position error after the kidnap [m]
+  int full_runs = 0;                                   ///< runs whose map filled
+  double reloc_error_m = NAN;                          ///< mean position error after the kidnap [m]
   double reloc_anees_before = NAN, reloc_anees_after = NAN;  ///< mean NEES before and after the kidnap
 };
 
@@ -202,7 +196,6 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"association_s_total", r.assoc_s},
                  {"association_ms_per_scan", r.scans ? 1e3 * r.assoc_s / r.scans : 0.0},
                  {"run_s_mean", r.runs ? r.run_s / r.runs : 0.0},
-                 {"budget_hits", r.budget_hits},
                  {"mean_abs_x_m", num(r.abs_x)},
                  {"mean_abs_y_m", num(r.abs_y)},
                  {"anees", num(r.anees)},
@@ -218,23 +211,14 @@ inline nlohmann::json rows_json(const std::vector<ReportRow>& rows) {
                  {"relocalised_within_3_scans", r.reloc_found3},
                  {"false_relocalisations", r.reloc_false},
                  {"runs_over_5_false_pairs", r.runs_over_5_fp},
-                 {"loop_closures_committed", r.loop_commits},
-                 {"loop_scans_held", r.loop_held_scans},
-                 {"hypothesis_windows", r.windows},
-                 {"hypothesis_windows_committed", r.window_commits},
-                 {"hypothesis_window_scans", r.window_held_scans},
-                 {"cluster_first_regrouped", r.regrouped},
-                 {"landmarks_merged", r.merges},
                  {"runs_map_full", r.full_runs},
-                 {"not_augmented", r.not_augmented},
-                 {"landmarks_evicted", r.evicted},
-                 {"false_pairs_to_duplicate", r.fp_to_duplicate},
-                 {"false_pairs_to_original", r.fp_to_original},
-                 {"false_pairs_in_group", r.fp_in_group},
-                 {"false_pairs_other_group", r.fp_other_group},
                  {"pose_error_after_kidnap_m", num(r.reloc_error_m)},
                  {"anees_before_kidnap", num(r.reloc_anees_before)},
                  {"anees_after_kidnap", num(r.reloc_anees_after)}});
+    nlohmann::json& row = a.back();
+#define GEOJCBB_RUN_COUNTER_JSON(name, key, doc) row[key] = r.name;
+    GEOJCBB_RUN_COUNTERS(GEOJCBB_RUN_COUNTER_JSON)
+#undef GEOJCBB_RUN_COUNTER_JSON
   }
   return a;
 }

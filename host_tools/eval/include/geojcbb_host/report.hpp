@@ -18,23 +18,17 @@ namespace geojcbb::host {
 
 struct RunAggregate {
   Score score, group_score;
-  int runs = 0, failed = 0, scans = 0, observations = 0, budget_hits = 0, fp_clutter = 0;
+  int runs = 0, failed = 0, scans = 0, observations = 0;
+  GEOJCBB_RUN_COUNTERS(GEOJCBB_RUN_COUNTER_MEMBER)  ///< RunResult's, summed
   int landmarks = 0, spurious_in_map = 0, duplicates = 0, removed_true = 0;
   double assoc_s = 0, run_s = 0, abs_x = 0, abs_y = 0;
-  double anees_sum = 0;                                        ///< sum over runs of each run's time-averaged NEES
-  std::vector<double> nees_sum, ex_sum, ey_sum, t;             ///< per scan, over the runs
-  std::vector<double> scan_ms;                                 ///< every scan's association time [ms]
-  int reloc_runs = 0, reloc_found3 = 0;                        ///< kidnap scenes: runs, and found within 3 scans
-  int reloc_false = 0;                                         ///< runs with a false relocalisation
-  int fp_to_duplicate = 0, fp_to_original = 0;                 ///< RunResult's, summed
-  int fp_in_group = 0, fp_other_group = 0;                     ///< RunResult's, summed
-  int runs_over_5_fp = 0;                                      ///< runs with more than 5 false pairs
-  int loop_commits = 0, loop_held_scans = 0;                   ///< RunResult's, summed
-  int windows = 0, window_commits = 0, window_held_scans = 0;  ///< RunResult's, summed
-  int regrouped = 0;                                           ///< observations cluster_first paired anew
-  int merges = 0;                                              ///< RunResult's, summed
-  int not_augmented = 0, full_runs = 0;                        ///< RunResult's, summed; runs whose map filled
-  int evicted = 0;                                             ///< RunResult's, summed
+  double anees_sum = 0;                             ///< sum over runs of each run's time-averaged NEES
+  std::vector<double> nees_sum, ex_sum, ey_sum, t;  ///< per scan, over the runs
+  std::vector<double> scan_ms;                      ///< every scan's association time [ms]
+  int reloc_runs = 0, reloc_found3 = 0;             ///< kidnap scenes: runs, and found within 3 scans
+  int reloc_false = 0;                              ///< runs with a false relocalisation
+  int runs_over_5_fp = 0;                           ///< runs with more than 5 false pairs
+  int full_runs = 0;                                ///< runs whose map filled
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
   RunResult first;  ///< the run the path figure shows (set by the caller)
   bool have_first = false;
