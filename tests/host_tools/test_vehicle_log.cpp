@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "geojcbb/ekf/motion.hpp"
 #include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/gps.hpp"
 #include "geojcbb_host/victoria_park.hpp"
@@ -22,10 +23,9 @@ replay::EventLog read_text(const std::string& text) {
   return replay::read_event_log(in, "mem");
 }
 
-// The pose after an increment (ekf::compose without Jacobians).
+// The pose after an increment: the filter's own motion model (ekf::compose).
 Pose2<double> compose(const Pose2<double>& x, double dx, double dy, double dth) {
-  const double c = std::cos(x.theta), s = std::sin(x.theta);
-  return {x.x + c * dx - s * dy, x.y + s * dx + c * dy, wrap_angle(x.theta + dth)};
+  return ekf::compose(x, ekf::PoseIncrement<double>{dx, dy, dth, Mat3<double>::Zero()});
 }
 
 }  // namespace

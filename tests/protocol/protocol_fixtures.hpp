@@ -10,7 +10,10 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
+#include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -44,62 +47,38 @@ inline Capabilities sample<Capabilities>() {
   c.set_firmware_id("geojcbb-0.1.0");
   return c;
 }
+/// Field f of m set to a value other than its default and within its range: a bool negated; an
+/// integer or enum the default + 1 (else - 1); a float the first of default x 0.5, + 0.125, - 0.125.
+/// (CONFIG: every field, from its field list, so a field added to CONFIG is in the sample at once.)
+template <class R, class T>
+void set_other_than_default(R& m, const Field<R, T>& f) {
+  T& v = m.*(f.member);
+  const T d = v;
+  if constexpr (std::is_same<T, bool>::value) {
+    v = !d;
+  } else if constexpr (std::is_floating_point<T>::value) {
+    for (const float c : {d * 0.5f, d + 0.125f, d - 0.125f}) {
+      if (c != d && check_float(f.range, c) == Error::kOk) {
+        v = c;
+        return;
+      }
+    }
+  } else {
+    using I = std::conditional_t<std::is_enum<T>::value, std::int64_t, T>;
+    const auto k = static_cast<std::int64_t>(d);
+    const auto top = static_cast<std::int64_t>(std::numeric_limits<I>::max());
+    for (const std::int64_t c : {k + 1, k - 1}) {
+      if (c >= 0 && c <= top && int_in_range(f.range, c)) {
+        v = static_cast<T>(c);
+        return;
+      }
+    }
+  }
+}
 template <>
 inline Config sample<Config>() {
   Config c{};
-  c.strategy = StrategyCode::kDfjcbb;
-  c.confidence = 0.95f;
-  c.new_landmark_level = 0.9999f;
-  c.local_radius_m = 7.5f;
-  c.groups = 4;
-  c.condition_groups = true;
-  c.dbscan_eps_m = 1.25f;
-  c.dbscan_min_points = 3;
-  c.node_budget = 123456;
-  c.min_range_m = 0.3f;
-  c.max_range_m = 12.0f;
-  c.half_fov_rad = 1.5f;
-  c.confirm_hits = 2;
-  c.max_misses = 4;
-  c.max_tentative_reviews = 6;
-  c.joint_recheck = false;
-  c.ambiguity_margin = 2.5f;
-  c.new_if_candidates_taken = true;
-  c.verify = true;
-  c.full_covariance_check = true;
-  c.papers_em = true;
-  c.seed_min_position_var_m2 = 3.0f;
-  c.consistency_wide_d2 = 20.0f;
-  c.consistency_pair_d2 = 9.0f;
-  c.rjc = true;
-  c.rjc_tries = 5;
-  c.rjc_subset = 6;
-  c.occlusion_rad = 0.03f;
-  c.miss_probability = 1e-5f;
-  c.static_gate_level = 0.95f;
-  c.first_estimates_jacobians = false;
-  c.augment = false;
-  c.relocalise = true;
-  c.reloc_lost_position_var_m2 = 16.0f;
-  c.reloc_lost_heading_var_rad2 = 0.5f;
-  c.reloc_min_inliers = 6;
-  c.reloc_margin = 3;
-  c.reloc_base_pairs = 5;
-  c.reloc_inflation = 9.0f;
-  c.reloc_confirm_scans = 2;
-  c.reloc_lost_failed_scans = 4;
-  c.loop_check = true;
-  c.loop_age = 50;
-  c.loop_min_inliers = 4;
-  c.loop_search_m = 12.0f;
-  c.loop_search_rad = 0.3f;
-  c.loop_margin_nats = 5.0f;
-  c.loop_confirm_scans = 3;
-  c.loop_inflation = 9.0f;
-  c.loop_detection_probability = 0.8f;
-  c.loop_unexplained_density = 0.01f;
-  c.loop_merge_d2 = 6.0f;
-  c.stats_period_scans = 0x1234;
+  std::apply([&c](const auto&... f) { (set_other_than_default(c, f), ...); }, Config::fields());
   return c;
 }
 template <>

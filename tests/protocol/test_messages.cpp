@@ -216,6 +216,25 @@ void check_float_fields(const M& valid, std::size_t count = 0) {
 }
 }  // namespace
 
+TEST_CASE("protocol: the CONFIG sample differs from the defaults in every field and is valid") {
+  const Config c = sample<Config>();
+  const Config d{};
+  int fields = 0, differ = 0;
+  auto one = [&](const auto& f) {
+    CAPTURE(f.name);
+    const bool other = !(c.*(f.member) == d.*(f.member));
+    CHECK(other);
+    ++fields;
+    differ += other;
+  };
+  std::apply([&](const auto&... f) { (one(f), ...); }, Config::fields());
+  CHECK(differ == fields);
+  CHECK(fields > 0);
+  std::array<std::uint8_t, kMaxPayload> buf{};
+  std::size_t n = 0;
+  CHECK(c.encode(buf.data(), buf.size(), n) == Error::kOk);
+}
+
 TEST_CASE("protocol: NaN and Inf in every float field are rejected") {
   check_float_fields(sample<Config>());
   check_float_fields(sample<Reset>());

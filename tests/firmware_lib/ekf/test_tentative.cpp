@@ -38,6 +38,14 @@ StepSettings<T> tentative_settings() {
   return s;
 }
 
+/// The landmark policy SlamStep::configure builds from tentative_settings (the same binding).
+template <typename T>
+ekf::LandmarkPolicy tentative_policy() {
+  ekf::LandmarkPolicy p;
+  ekf::bind_options(tentative_settings<T>(), p);
+  return p;
+}
+
 /// A robot standing at `x` that has seen the map for 25 scans: every landmark in view confirmed.
 template <typename T>
 std::unique_ptr<Rig<T>> standing_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x) {
@@ -50,7 +58,7 @@ std::unique_ptr<Rig<T>> standing_rig(const std::vector<Eigen::Vector2d>& map, co
     REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
   }
   for (int j = 0; j < rig->step.slam().landmarks(); ++j) {
-    REQUIRE(rig->step.slam().confirmed(j, ekf::LandmarkPolicy{3, 2, 30, 0.0f, 0.0f, 20}));
+    REQUIRE(rig->step.slam().confirmed(j, tentative_policy<T>()));
   }
   return rig;
 }
@@ -64,14 +72,6 @@ void observe_with(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& 
   Mat2<T> R;
   R << T(0.01), T(0), T(0), T(3e-4);
   REQUIRE(obs.push(Vec2<T>(T(std::hypot(dx, dy)), T(wrap_angle(std::atan2(dy, dx) - x.theta))), R) == Status::kOk);
-}
-
-template <typename T>
-Mat2<T> lm_cov(const ekf::Slam<T, B>& s, int j) {
-  const int l = ekf::Layout::landmark(j);
-  Mat2<T> P;
-  P << s.cov(l, l), s.cov(l, l + 1), s.cov(l + 1, l), s.cov(l + 1, l + 1);
-  return P;
 }
 
 template <typename T>
@@ -110,7 +110,7 @@ TEST_CASE_TEMPLATE("tentative: a mover never moves the pose, is caught, and is n
       CHECK(with->out.outcome[last] == node::Outcome::kPaired);  // with its own tentative landmark
       const int j = with->step.slam().index_of(with->out.feature[last]);
       REQUIRE(j >= 0);
-      CHECK(!with->step.slam().confirmed(j, ekf::LandmarkPolicy{3, 2, 30, 0.0f, 0.0f, 20}));
+      CHECK(!with->step.slam().confirmed(j, tentative_policy<T>()));
     }
   }
   // The static gate's time to catch it at 6 cm/s, 5 m away, sigma 0.1 m and 1 degree: under the 20
@@ -145,7 +145,7 @@ TEST_CASE_TEMPLATE("tentative: a static new landmark is paired while tentative, 
     const int j = with->step.slam().index_of(id);
     REQUIRE(j >= 0);
     // Reviews so far: k + 1. Tentative until 20 (its pairs then move only itself).
-    const bool confirmed = with->step.slam().confirmed(j, ekf::LandmarkPolicy{3, 2, 30, 0.0f, 0.0f, 20});
+    const bool confirmed = with->step.slam().confirmed(j, tentative_policy<T>());
     CHECK(confirmed == (k + 1 >= 20));
     if (k + 1 <= 20) check_same_pose(*with, *without);
   }
@@ -174,7 +174,7 @@ TEST_CASE_TEMPLATE("tentative: the Schmidt update moves one landmark, refuses ba
   }
   T d2 = T(-1);
   const Vec2<T> z(T(5.2), T(0.22));
-  const Mat2<T> Pll0 = lm_cov(s, 0);
+  const Mat2<T> Pll0 = node::MapView<T, B>(s, ekf::LandmarkPolicy{}).cov(0);
   REQUIRE(allocations_during([&] { REQUIRE(s.update_alone(0, z, R, ws, d2) == Status::kOk); }) == 0);
   CHECK(d2 > T(0));
   for (int r = 0; r < n; ++r) {
@@ -187,7 +187,7 @@ TEST_CASE_TEMPLATE("tentative: the Schmidt update moves one landmark, refuses ba
     }
   }
   CHECK(s.x(3) != x0[3]);
-  const Mat2<T> Pll = lm_cov(s, 0);
+  const Mat2<T> Pll = node::MapView<T, B>(s, ekf::LandmarkPolicy{}).cov(0);
   CHECK(Pll.trace() < Pll0.trace());
   // The whole P stays positive definite.
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic> P(n, n);

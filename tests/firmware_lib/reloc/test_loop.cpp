@@ -108,6 +108,31 @@ TEST_CASE_TEMPLATE("loop: a drifted filter's closure is held, committed on confi
   for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
 }
 
+TEST_CASE("loop: float and double agree: the same verdicts, pairs and committed pose") {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
+  auto rf = make_rig<float>(map, believed);
+  auto rd = make_rig<double>(map, believed);
+  observe_from(map, truth, rf->obs);
+  observe_from(map, truth, rd->obs);
+  REQUIRE(rf->obs.count == rd->obs.count);
+  for (int scan = 0; scan < 3; ++scan) {  // pending, committed, consistent (the case above)
+    CAPTURE(scan);
+    REQUIRE(rf->step.step(rf->obs, rf->out) == Status::kOk);
+    REQUIRE(rd->step.step(rd->obs, rd->out) == Status::kOk);
+    CHECK(rf->out.loop.verdict == rd->out.loop.verdict);
+    CHECK(rf->out.loop.held == rd->out.loop.held);
+    for (int i = 0; i < rd->out.count; ++i) {
+      CHECK(rf->out.outcome[i] == rd->out.outcome[i]);
+      CHECK(rf->out.feature[i] == rd->out.feature[i]);
+    }
+    const Pose2<float> pf = rf->step.slam().pose();
+    const Pose2<double> pd = rd->step.slam().pose();
+    CHECK(std::hypot(double(pf.x) - pd.x, double(pf.y) - pd.y) < 1e-3);
+    CHECK(std::abs(wrap_angle(double(pf.theta) - pd.theta)) < 1e-4);
+  }
+}
+
 TEST_CASE("loop: a closure whose correction changes between scans is not committed") {
   const auto map = test::reloc_map();
   const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48}, other{-6, 1, 0.3};

@@ -131,6 +131,33 @@ TEST_CASE_TEMPLATE("window: a second cluster in view resolves the row", T, float
   }
 }
 
+TEST_CASE("window: float and double agree: the same verdicts, hypotheses, pairs and pose") {
+  for (const bool hold : {false, true}) {
+    CAPTURE(hold);
+    auto rf = make_rig<float>(hold);
+    auto rd = make_rig<double>(hold);
+    for (int scan = 0; scan < 4; ++scan) {  // the row alone, then the off-row landmark in view
+      CAPTURE(scan);
+      observe(kTruth, scan >= 2, rf->obs);
+      observe(kTruth, scan >= 2, rd->obs);
+      REQUIRE(rf->step.step(rf->obs, rf->out) == Status::kOk);
+      REQUIRE(rd->step.step(rd->obs, rd->out) == Status::kOk);
+      CHECK(rf->out.window.verdict == rd->out.window.verdict);
+      CHECK(rf->out.window.hypotheses == rd->out.window.hypotheses);
+      CHECK(rf->out.window.held == rd->out.window.held);
+      CHECK(std::abs(double(rf->out.window.lead) - rd->out.window.lead) < 1e-2);
+      for (int i = 0; i < rd->out.count; ++i) {
+        CHECK(rf->out.outcome[i] == rd->out.outcome[i]);
+        CHECK(rf->out.feature[i] == rd->out.feature[i]);
+      }
+      const Pose2<float> pf = rf->step.slam().pose();
+      const Pose2<double> pd = rd->step.slam().pose();
+      CHECK(std::hypot(double(pf.x) - pd.x, double(pf.y) - pd.y) < 1e-3);
+      CHECK(std::abs(wrap_angle(double(pf.theta) - pd.theta)) < 1e-4);
+    }
+  }
+}
+
 TEST_CASE("window: off, too many rivals refused, bad input a Status, no allocation") {
   using T = double;
   auto rig = make_rig<T>(true);
