@@ -396,7 +396,7 @@ TEST_CASE("max clique allocates nothing") {
   }
 }
 
-TEST_CASE("max clique: search nodes on random 64-node graphs (reported for docs/consistency.md)") {
+TEST_CASE("max clique: search nodes on random 64-node graphs (reported for docs/results/consistency.md)") {
   for (const double density : {0.1, 0.3, 0.5, 0.7, 0.8, 0.9, 0.95}) {
     std::mt19937_64 rng(static_cast<std::uint64_t>(1000 * density));
     std::vector<std::uint32_t> nodes;
