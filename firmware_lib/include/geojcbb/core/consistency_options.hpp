@@ -25,7 +25,7 @@ enum class PairingGate : std::uint8_t {
 /// Compile-time cap on a max-clique search's run-time node budget: the worst case of one call.
 constexpr std::uint32_t kMaxCliqueSearchNodes = 1000000;
 
-/// Default search nodes of one consistency call (docs/consistency.md: random 64-node graphs need far
+/// Default search nodes of one consistency call (docs/results/consistency.md: random 64-node graphs need far
 /// fewer; consistency graphs are sparse outside their true clique).
 constexpr std::uint32_t kDefaultCliqueBudget = 20000;
 
