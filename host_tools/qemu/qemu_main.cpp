@@ -31,6 +31,7 @@ struct Budget {
   std::vector<std::uint32_t> budget_hit;   ///< association of scans that hit the JCBB node budget
   std::vector<std::uint32_t> relocalise;   ///< the relocaliser's alignment, of the scans that ran it
   std::vector<std::uint32_t> loop;         ///< the loop-closure check, of the scans that ran it
+  std::vector<std::uint32_t> window;       ///< clusters first and the hypothesis window, of the scans that ran them
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
 };
@@ -70,6 +71,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       b.augment_review.push_back(st.instr_augment_review);
       if (st.instr_relocalise > 0) b.relocalise.push_back(st.instr_relocalise);
       if (st.instr_loop > 0) b.loop.push_back(st.instr_loop);
+      if (st.instr_window > 0) b.window.push_back(st.instr_window);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -259,6 +261,10 @@ int run(int argc, char** argv) {
         if (!b.loop.empty()) {
           std::printf("  %-8s %zu scans had their loop closure checked: median %u, max %u instructions\n",
                       strategies[k].name().c_str(), b.loop.size(), median(b.loop), maximum(b.loop));
+        }
+        if (!b.window.empty()) {
+          std::printf("  %-8s %zu scans ran clusters first or the hypothesis window: median %u, max %u instructions\n",
+                      strategies[k].name().c_str(), b.window.size(), median(b.window), maximum(b.window));
         }
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {

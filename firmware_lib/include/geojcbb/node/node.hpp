@@ -260,13 +260,9 @@ class Node {
     s.budget_hits = budget_hits_;
     s.scans = scans_;
     s.instr_predict = last_predict_;
-    s.instr_predict_local = last_.counts.predict_local;
-    s.instr_associate = last_.counts.associate;
-    s.instr_update = last_.counts.update;
-    s.instr_augment_review = last_.counts.augment_review;
-    s.instr_relocalise = last_.counts.relocalise;
-    s.instr_loop = last_.counts.loop;
-    s.instr_step = last_.counts.total;
+#define GEOJCBB_STAGE_COUNT_COPY(name, meaning) s.instr_##name = last_.counts.name;
+    GEOJCBB_STAGE_COUNTS(GEOJCBB_STAGE_COUNT_COPY)
+#undef GEOJCBB_STAGE_COUNT_COPY
     s.stack_high_water_bytes = stack_high_water_;
     return s;
   }

@@ -149,7 +149,7 @@ class SlamStep {
       unused(obs, out);
       out.reloc = rs;
       out.counts.relocalise = t_reloc - t0;  // aligned (the robot is lost)
-      out.counts.total = t_reloc - t0;
+      out.counts.step = t_reloc - t0;
       return Status::kOk;
     }
     ekf::LocalMapStats local;
@@ -189,7 +189,7 @@ class SlamStep {
     out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
-    out.counts.total += t_window - t0;
+    out.counts.step += t_window - t0;
     int paired = 0;
     for (int i = 0; i < out.count; ++i) paired += out.outcome[i] == Outcome::kPaired;  // <= kMaxObservations
     if (reloc_.confirm(cfg_, paired, out.count, pred_.count, assoc_.jointly_compatible, rs) &&

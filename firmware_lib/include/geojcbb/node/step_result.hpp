@@ -9,6 +9,7 @@
 #include "geojcbb/ekf/slam.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
 #include "geojcbb/node/stages/relocaliser.hpp"
+#include "geojcbb/protocol/stage_counts.h"
 #include "geojcbb/reloc/loop.hpp"
 #include "geojcbb/reloc/window.hpp"
 
@@ -23,12 +24,12 @@ enum class Outcome : std::uint8_t {
   kNotAugmented,  ///< would have become a landmark, but the map is full
 };
 
-/// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without).
+/// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without): one
+/// counter per row of the stage table (protocol/stage_counts.h), which STATS carries as instr_<name>.
 struct StageCounts {
-  std::uint32_t predict_local = 0, associate = 0, update = 0, augment_review = 0, total = 0;
-  std::uint32_t relocalise = 0;  ///< the alignment of a lost scan (0 otherwise)
-  std::uint32_t loop = 0;        ///< the loop check (0 when it did not run)
-  std::uint32_t window = 0;      ///< clusters first and the hypothesis window (0 when they did not run)
+#define GEOJCBB_STAGE_COUNT_MEMBER(name, meaning) std::uint32_t name = 0;
+  GEOJCBB_STAGE_COUNTS(GEOJCBB_STAGE_COUNT_MEMBER)
+#undef GEOJCBB_STAGE_COUNT_MEMBER
 };
 
 template <typename T, class B>

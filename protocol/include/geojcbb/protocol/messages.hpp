@@ -15,6 +15,7 @@
 #include "geojcbb/protocol/fields.hpp"
 #include "geojcbb/protocol/frame.hpp"
 #include "geojcbb/protocol/schema.hpp"
+#include "geojcbb/protocol/stage_counts.h"
 
 namespace geojcbb::proto {
 
@@ -621,13 +622,10 @@ struct Stats : Codec<Stats> {
   std::uint32_t budget_hits = 0;    ///< scans that ran out of the JCBB node budget
   std::uint32_t scans = 0;          ///< scans processed
   std::uint32_t instr_predict = 0;
-  std::uint32_t instr_predict_local = 0;
-  std::uint32_t instr_associate = 0;
-  std::uint32_t instr_update = 0;
-  std::uint32_t instr_augment_review = 0;
-  std::uint32_t instr_relocalise = 0;  ///< the relocaliser's alignment (a lost scan)
-  std::uint32_t instr_loop = 0;        ///< the loop-closure check (0 when it did not run)
-  std::uint32_t instr_step = 0;        ///< the whole step
+  // The last scan's step by stage: one field per row of the stage table (stage_counts.h).
+#define GEOJCBB_STATS_STAGE_MEMBER(name, meaning) std::uint32_t instr_##name = 0;
+  GEOJCBB_STAGE_COUNTS(GEOJCBB_STATS_STAGE_MEMBER)
+#undef GEOJCBB_STATS_STAGE_MEMBER
   std::uint32_t stack_high_water_bytes = 0;
 
   static constexpr auto fields() {
@@ -644,14 +642,10 @@ struct Stats : Codec<Stats> {
               "`MessageCounters`: payloads that failed validation"),
         field("budget_hits", &Stats::budget_hits, range::any(), "scans", "scans that ran out of JCBB nodes"),
         field("scans", &Stats::scans, range::any(), "scans", "scans processed"),
-        field("instr_predict", &Stats::instr_predict, range::any(), kInstr, "last scan, by stage"),
-        field("instr_predict_local", &Stats::instr_predict_local, range::any(), kInstr),
-        field("instr_associate", &Stats::instr_associate, range::any(), kInstr),
-        field("instr_update", &Stats::instr_update, range::any(), kInstr),
-        field("instr_augment_review", &Stats::instr_augment_review, range::any(), kInstr),
-        field("instr_relocalise", &Stats::instr_relocalise, range::any(), kInstr, "0 unless the robot was lost"),
-        field("instr_loop", &Stats::instr_loop, range::any(), kInstr, "0 unless the closure check ran"),
-        field("instr_step", &Stats::instr_step, range::any(), kInstr, "the whole step"),
+        field("instr_predict", &Stats::instr_predict, range::any(), kInstr, "the last odometry's prediction"),
+#define GEOJCBB_STATS_STAGE_FIELD(name, meaning) field("instr_" #name, &Stats::instr_##name, range::any(), kInstr, meaning),
+        GEOJCBB_STAGE_COUNTS(GEOJCBB_STATS_STAGE_FIELD)
+#undef GEOJCBB_STATS_STAGE_FIELD
         field("stack_high_water_bytes", &Stats::stack_high_water_bytes, range::any(), "B",
               "0 where the board does not measure it"));
   }
@@ -760,7 +754,7 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 152 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 76 &&
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 80 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
                   AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");
