@@ -20,7 +20,8 @@ void add_common_flags(CLI::App& sub, CommonFlags& f, unsigned which, const std::
                       const std::string& unit) {
   if ((which & kStrategiesFlag) != 0) {
     sub.add_option("--strategies", f.strategies,
-                   std::string("strategies, comma separated (") + kPresetsHelp + "; default the seven presets)")
+                   std::string("strategies, comma separated (") + kPresetsHelp +
+                       "; default the six papers' presets, PCJCBB and the robust preset PCJCBB+RL)")
         ->delimiter(',');
   }
   if ((which & kTruthFlag) != 0) {

@@ -24,6 +24,8 @@
 #include "geojcbb_host/run_cli.hpp"
 #include "geojcbb_host/slam_run.hpp"
 #include "geojcbb_host/svg_plot.hpp"
+#include "geojcbb_host/worlds.hpp"
+#include "geojcbb_host/worlds_table.hpp"
 
 namespace geojcbb::host {
 namespace fs = std::filesystem;
@@ -50,7 +52,8 @@ const std::vector<std::string> kSimCsvColumns{"scans",
                                               "spurious_in_map",
                                               "budget_hits",
                                               "relocalised_at_scan",
-                                              "anees"};
+                                              "anees",
+                                              "ambiguous_scans"};
 
 struct SimOptions {
   std::vector<std::string> scenarios;
@@ -60,7 +63,60 @@ struct SimOptions {
   RunOptions run;
   RunInputsFn runner;       ///< empty: in process
   std::string device_info;  ///< the device the runs were streamed to (empty: in process)
+  // Generated worlds (--worlds): drawn, written as scenario files and run like --scenario files.
+  int worlds = 0;
+  int world_runs = 1;  ///< runs per world: 1, or --runs when given
+  std::uint64_t world_seed = 1000;
+  std::string family;                     ///< empty: the families in turn
+  std::vector<std::string> world_family;  ///< per scenario: its family ("" for a --scenario file)
 };
+
+// The first run of each (scenario, strategy): what the worlds' table compares.
+struct FirstRun {
+  bool have = false;
+  double err = 0, f1 = 0, anees = 0;
+};
+
+double mean_nees(const RunResult& r) {
+  double nees = 0;
+  for (const StepRecord& k : r.steps) nees += k.pose_nees;
+  return r.steps.empty() ? 0.0 : nees / static_cast<double>(r.steps.size());
+}
+
+// The non-inferiority table over the generated worlds, when both presets ran (worlds_table.hpp).
+void report_worlds(const SimOptions& o, const std::vector<Method>& strategies,
+                   const std::vector<std::vector<FirstRun>>& first) {
+  int base = -1, robust = -1, truth = -1;
+  for (std::size_t st = 0; st < strategies.size(); ++st) {
+    const std::string n = strategies[st].name();
+    if (n == "PCJCBB") base = static_cast<int>(st);
+    if (n == "PCJCBB+RL") robust = static_cast<int>(st);
+    if (n == "TRUTH") truth = static_cast<int>(st);
+  }
+  if (base < 0 || robust < 0) return;
+  std::vector<WorldOutcome> worlds;
+  std::ofstream csv(o.flags.out_dir + "/worlds.csv");
+  csv << "family,file,err_pcjcbb_m,err_robust_m,err_truth_m,f1_pcjcbb,f1_robust,anees_pcjcbb,anees_robust,worse,"
+         "recovered\n";
+  for (std::size_t sc = 0; sc < o.scenarios.size(); ++sc) {
+    if (o.world_family[sc].empty()) continue;
+    const FirstRun& b = first[sc][static_cast<std::size_t>(base)];
+    const FirstRun& r = first[sc][static_cast<std::size_t>(robust)];
+    if (!b.have || !r.have) continue;
+    WorldOutcome w{o.world_family[sc], o.scenarios[sc], b.err, r.err, b.f1, r.f1, b.anees, r.anees, -1};
+    if (truth >= 0 && first[sc][static_cast<std::size_t>(truth)].have) {
+      w.err_truth = first[sc][static_cast<std::size_t>(truth)].err;
+    }
+    csv << w.family << ',' << csv_escape(w.file) << ',' << w.err_base << ',' << w.err_robust << ',' << w.err_truth
+        << ',' << w.f1_base << ',' << w.f1_robust << ',' << w.anees_base << ',' << w.anees_robust << ','
+        << robust_worse(w) << ',' << robust_recovered(w) << '\n';
+    worlds.push_back(std::move(w));
+  }
+  if (worlds.empty()) return;
+  std::printf("\n== generated worlds (first seed %llu, run seed %llu): %s/worlds.csv\n%s",
+              static_cast<unsigned long long>(o.world_seed), static_cast<unsigned long long>(o.seed),
+              o.flags.out_dir.c_str(), non_inferiority_markdown(worlds).c_str());
+}
 
 int run_sim(const SimOptions& o) {
   const std::vector<Method> strategies = select_methods(o.flags.strategies, true, o.flags.oracle);
@@ -72,9 +128,12 @@ int run_sim(const SimOptions& o) {
     int sc, st, run;
   };
   std::vector<Job> jobs;
-  for (int run = 0; run < o.runs; ++run)  // seed-major: a partial result is still balanced
-    for (std::size_t sc = 0; sc < scenarios.size(); ++sc)
+  const int most_runs = std::max(o.runs, o.worlds > 0 ? o.world_runs : 0);
+  for (int run = 0; run < most_runs; ++run)  // seed-major: a partial result is still balanced
+    for (std::size_t sc = 0; sc < scenarios.size(); ++sc) {
+      if (run >= (o.world_family[sc].empty() ? o.runs : o.world_runs)) continue;
       for (std::size_t st = 0; st < strategies.size(); ++st) jobs.push_back({int(sc), int(st), run});
+    }
   std::vector<std::vector<Cell>> cells(scenarios.size(), std::vector<Cell>(strategies.size()));
   struct RunRow {
     int sc, st, run;
@@ -82,6 +141,7 @@ int run_sim(const SimOptions& o) {
     double run_s;
   };
   std::vector<std::string> csv_rows(jobs.size());
+  std::vector<std::vector<FirstRun>> first(scenarios.size(), std::vector<FirstRun>(strategies.size()));
   std::mutex mu;
   const int threads = o.runner           ? 1  // one device, one run at a time
                       : o.flags.jobs > 0 ? o.flags.jobs
@@ -111,6 +171,7 @@ int run_sim(const SimOptions& o) {
       csv_rows[j] = csv_escape(scenarios[jb.sc].name) + ',' + strategies[jb.st].name() + ',' + std::to_string(seed) +
                     ',' + run_csv(r, run_s, kSimCsvColumns, kidnap);
       if (jb.run == 0) {
+        first[jb.sc][jb.st] = {true, std::hypot(r.mean_abs_x_m, r.mean_abs_y_m), r.score.f1(), mean_nees(r)};
         c.first = std::move(r);
         c.have_first = true;
       }
@@ -140,6 +201,11 @@ int run_sim(const SimOptions& o) {
       rows.push_back(row);
     }
     const int scans = cells[sc][0].runs ? cells[sc][0].scans / cells[sc][0].runs : 0;
+    const bool world = !o.world_family[sc].empty();  // a generated world: in summary.json and the worlds' table
+    if (world) {
+      js["scenarios"].push_back({{"name", s.name}, {"file", o.scenarios[sc]}, {"strategies", rows_json(rows)}});
+      continue;
+    }
     std::printf("\n== %s: %d runs per strategy (seeds %llu..%llu), %d scans per run\n", s.name.c_str(), o.runs,
                 static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1), scans);
     print_tables(rows, stdout);
@@ -194,7 +260,7 @@ int run_sim(const SimOptions& o) {
       std::printf("figures: %s_path.svg, %s_error.svg, %s_nees.svg\n", stem.c_str(), stem.c_str(), stem.c_str());
     }
   }
-  if (o.flags.svg) {
+  if (o.flags.svg && o.worlds == 0) {  // with worlds, their table instead
     svg::BarChart bars;
     bars.title = "F1 per strategy (" + std::to_string(o.runs) + " runs each)";
     bars.ylabel = "F1";
@@ -222,6 +288,7 @@ int run_sim(const SimOptions& o) {
     std::ofstream(o.flags.out_dir + "/summary.json") << js.dump(2) << '\n';
     if (!csv) throw std::runtime_error("cannot write " + o.flags.out_dir + "/runs.csv");
   }
+  if (o.worlds > 0) report_worlds(o, strategies, first);
   std::printf(
       "\n%zu runs in %.1f s on %d threads; per-run rows: %s/runs.csv, "
       "summary: %s/summary.json\n",
@@ -242,15 +309,43 @@ Subcommand add_sim_command(CLI::App& app) {
       ->default_val(20)
       ->check(CLI::Range(1, 100000));
   sim->add_option("--seed", o->seed, "first seed")->default_val(1);
+  std::string families;
+  for (const WorldFamily& f : world_families()) families += std::string("\n    ") + f.name + ": " + f.ranges;
+  sim->add_option("--worlds", o->worlds,
+                  "generated worlds to run besides the --scenario files (one run each unless --runs is given; "
+                  "without --scenario, only the worlds), "
+                  "written to OUT_DIR/worlds/FAMILY_SEED.json; with PCJCBB and PCJCBB+RL among the strategies, the "
+                  "non-inferiority table (worlds.csv; docs/simulator.md). Families, taken in turn:" +
+                      families)
+      ->check(CLI::Range(0, 100000));
+  sim->add_option("--world-seed", o->world_seed, "seed of the first world (world k: seed + k)")->default_val(1000);
+  sim->add_option("--family", o->family, "draw every world from this family");
   add_common_flags(*sim, o->flags, kAllCommonFlags, "runs.csv, summary.json and the SVG figures", "run");
   sim->add_option("--max-steps", o->run.max_steps,
                   "stop each run after this many control intervals (0: the whole path)")
       ->default_val(0);
   add_run_options(*sim, o->run);
-  return {sim, [o]() {
-            if (o->scenarios.empty()) {
+  return {sim, [o, sim]() {
+            o->world_family.assign(o->scenarios.size(), "");
+            if (o->worlds > 0) {
+              if (sim->count("--runs") > 0) o->world_runs = o->runs;
+              const std::string dir = o->flags.out_dir + "/worlds";
+              fs::create_directories(dir);
+              const std::vector<WorldFamily>& fams = world_families();
+              for (int k = 0; k < o->worlds; ++k) {
+                const std::string fam =
+                    o->family.empty() ? fams[static_cast<std::size_t>(k) % fams.size()].name : o->family;
+                const std::uint64_t seed = o->world_seed + static_cast<std::uint64_t>(k);
+                const std::string path = dir + "/" + fam + "_" + std::to_string(seed) + ".json";
+                save_scenario(draw_world(fam, seed), path);
+                o->scenarios.push_back(path);
+                o->world_family.push_back(fam);
+              }
+            }
+            if (o->scenarios.empty() && o->worlds == 0) {
               o->scenarios = {std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json",
                               std::string(GEOJCBB_SCENARIO_DIR) + "/env2.json"};
+              o->world_family.assign(o->scenarios.size(), "");
             }
             o->flags.progress = progress_bar(o->flags);
             return with_device(o->flags.link, o->flags.oracle, false,

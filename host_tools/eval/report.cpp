@@ -142,7 +142,7 @@ const std::vector<std::string>& run_csv_columns() {
       "fn",          "precision",           "recall",       "f1",         "association_s",
       "run_s",       "mean_abs_x_m",        "mean_abs_y_m", "landmarks",  "spurious_in_map",
       "budget_hits", "relocalised_at_scan", "anees",        "duplicates", "fp_clutter",
-      "group_f1"};
+      "group_f1",    "ambiguous_scans"};
   return c;
 }
 
@@ -184,6 +184,8 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
       o << r.spurious_in_map;
     else if (c == "budget_hits")
       o << r.budget_hits;
+    else if (c == "ambiguous_scans")
+      o << r.ambiguous_scans;
     else if (c == "relocalised_at_scan")
       o << (kidnap_t_s > 0 ? kidnap_score(r, kidnap_t_s).found_at : -1);
     else if (c == "anees") {

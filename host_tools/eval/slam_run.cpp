@@ -207,6 +207,7 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   sc.score(s.truth, s.paired);  // before this scan's new landmarks are added
   const int scan_tp = res.score.tp - tp0, scan_fp = res.score.fp - fp0;
   res.relocalisations += reloc.relocalised;
+  res.ambiguous_scans += reloc.ambiguous || r.loop.ambiguous;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
     // A full map is a state, as on the device: the observation is not added, and counted.

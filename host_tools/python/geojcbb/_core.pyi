@@ -88,10 +88,8 @@ class Options(TypedDict, total=False):
     first_estimates_jacobians: bool  # default 1
     augment: bool  # default 1
     relocalise: bool  # default 0
-    reloc_lost_position_var_m2: float  # default 25
-    reloc_lost_heading_var_rad2: float  # default 0.25
     reloc_min_inliers: int  # default 5
-    reloc_margin: int  # default 2
+    reloc_margin_nats: float  # default 10
     reloc_base_pairs: int  # default 4
     reloc_inflation: float  # default 4
     reloc_confirm_scans: int  # default 1
@@ -99,8 +97,6 @@ class Options(TypedDict, total=False):
     loop_check: bool  # default 0
     loop_age: int  # default 100
     loop_min_inliers: int  # default 3
-    loop_search_m: float  # default 20
-    loop_search_rad: float  # default 0.5
     loop_margin_nats: float  # default 3
     loop_confirm_scans: int  # default 2
     loop_inflation: float  # default 4

@@ -135,7 +135,9 @@ TEST_CASE("loop: float and double agree: the same verdicts, pairs and committed 
 
 TEST_CASE("loop: a closure whose correction changes between scans is not committed") {
   const auto map = test::reloc_map();
-  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48}, other{-6, 1, 0.3};
+  // `other` is 2.1 m from the filter's pose, within its prior (0.1 m sigma + the 1 m floor), and
+  // 2.7 m from the first correction's pose.
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48}, other{-3, -0.5, 0.45};
   auto rig = make_rig<double>(map, believed);
   observe_from(map, truth, rig->obs);
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
@@ -144,6 +146,20 @@ TEST_CASE("loop: a closure whose correction changes between scans is not committ
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
   CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
   CHECK(position_error(rig->step, believed) < 1e-6);
+}
+
+// The prior replaced the hard search window: a correction of 5.4 m against a filter sure to 0.1 m
+// (prior d2 about 29 with the floor, over the 25.9 gate) is not a candidate, and nothing moves.
+TEST_CASE("loop: a correction the prior rules out is no closure") {
+  const auto map = test::reloc_map();
+  const Pose2<double> believed{-1.5, -2, 0.48}, far{-6, 1, 0.3};
+  auto rig = make_rig<double>(map, believed);
+  observe_from(map, far, rig->obs);
+  REQUIRE(rig->obs.count >= 6);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.loop.verdict != reloc::LoopVerdict::kPending);
+  CHECK(rig->out.loop.verdict != reloc::LoopVerdict::kCommitted);
+  CHECK(position_error(rig->step, believed) < 0.5);
 }
 
 TEST_CASE("loop: a closure the alignment agrees with is left as the association made it") {

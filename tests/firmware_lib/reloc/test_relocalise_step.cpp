@@ -63,6 +63,32 @@ TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on t
   CHECK(rig->step.localisation() == node::Localisation::kTracking);
 }
 
+// A large covariance is uncertainty, not lost (issue 36): the variance triggers are retired. A long
+// drift's honest covariance (36 m^2 of position variance, past the retired 25 m^2 trigger) keeps the
+// robot tracking, and the association closes the 1.5 m error over the next scans.
+TEST_CASE_TEMPLATE("reloc step: a large but honest covariance keeps the robot tracking", T, float, double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> at{-5, -5, 0.3};
+  auto rig = make_rig<T>(map, at);
+  const Mat3<T> P = Vec3<T>(T(18), T(18), T(0.05)).asDiagonal();
+  REQUIRE(rig->step.relocalise(Pose2<T>{T(-3.5), T(-5), T(0.3)}, P) == Status::kOk);
+  observe_from(map, at, rig->obs);
+  REQUIRE(rig->obs.count >= 6);
+  double error = position_error(rig->step, at);
+  for (int k = 1; k <= 3; ++k) {
+    CAPTURE(k);
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(!rig->out.reloc.aligned);
+    CHECK(rig->step.localisation() == node::Localisation::kTracking);
+    int paired = 0;
+    for (int i = 0; i < rig->out.count; ++i) paired += rig->out.outcome[i] == node::Outcome::kPaired;
+    CHECK(paired >= 3);
+    CHECK(position_error(rig->step, at) < error);  // each scan closes more of it
+    error = position_error(rig->step, at);
+  }
+  CHECK(error < 0.2);
+}
+
 TEST_CASE_TEMPLATE("reloc step: a kidnap the covariance does not show is lost after failed scans, then found", T, float,
                    double) {
   const auto map = test::reloc_map();

@@ -93,15 +93,11 @@
   X(BOOL, augment, 1, (ANY, 0, 0), "", "", \
     "add new landmarks (off: a known, fixed map; the host sets it with --known-map)") \
   X(BOOL, relocalise, 0, (ANY, 0, 0), "", "--relocalise", \
-    "when lost, align each scan against the map (pose-free) and resume at a unique, confirmed pose") \
-  X(REAL, reloc_lost_position_var_m2, 25, (GT, 0, 0), "m^2", "--reloc-lost-var", \
-    "the robot is lost when its position variance P_xx + P_yy reaches this") \
-  X(REAL, reloc_lost_heading_var_rad2, 0.25, (GT, 0, 0), "rad^2", "--reloc-lost-heading-var", \
-    "the robot is lost when its heading variance reaches this") \
+    "when lost (told, or reloc_lost_failed_scans), align each scan against the map with the pose prior and resume at a unique, confirmed pose") \
   X(INT, reloc_min_inliers, 5, (CLOSED, 3, 255), "", "--reloc-min-inliers", \
     "landmarks an aligned pose must explain, and a confirming scan pair") \
-  X(INT, reloc_margin, 2, (CLOSED, 1, 255), "", "--reloc-margin", \
-    "inliers by which the aligned pose must lead the best distinct pose") \
+  X(REAL, reloc_margin_nats, 10, (GE, 0, 0), "nats", "--reloc-margin", \
+    "log posterior (set likelihood + log prior) by which an aligned pose must lead the best distinct pose") \
   X(INT, reloc_base_pairs, 4, (CLOSED, 1, 8), "", "--reloc-base-pairs", \
     "observed pairs (the longest) whose matches in the map are tried per lost scan") \
   X(REAL, reloc_inflation, 4, (GE, 1, 0), "", "--reloc-inflation", \
@@ -115,11 +111,7 @@
   X(INT, loop_age, 100, (CLOSED, 1, 255), "scans", "--loop-age", \
     "a confirmed landmark is old (a closure's) when it has not been paired for this many scans") \
   X(INT, loop_min_inliers, 3, (CLOSED, 3, 255), "", "--loop-min-inliers", \
-    "old landmarks the alignment's pose must explain (reloc_margin and reloc_base_pairs as the relocaliser's)") \
-  X(REAL, loop_search_m, 20, (GT, 0, 0), "m", "--loop-search", \
-    "the alignment looks at old landmarks within local_radius_m + this of the pose, and moves it at most this") \
-  X(REAL, loop_search_rad, 0.5, (LOPEN, 0, 3.1415927410125732), "rad", "--loop-search-heading", \
-    "the alignment turns the pose by at most this") \
+    "old landmarks the alignment's pose must explain (reloc_margin_nats and reloc_base_pairs as the relocaliser's)") \
   X(REAL, loop_margin_nats, 3, (GE, 0, 0), "nats", "--loop-margin", \
     "set log-likelihood by which the alignment's closure must beat the association's") \
   X(INT, loop_confirm_scans, 2, (CLOSED, 1, 16), "", "--loop-confirm-scans", \
@@ -127,9 +119,9 @@
   X(REAL, loop_inflation, 4, (GE, 1, 0), "", "--loop-inflation", \
     "a committed closure grows the pose block by this times (the correction squared + the fit's covariance)") \
   X(REAL, loop_detection_probability, 0.9, (OPEN, 0, 1), "", "--loop-pd", \
-    "set likelihood: the probability that an old landmark in view is observed") \
+    "set likelihood (relocaliser, loop check, window): the probability that a landmark in view is observed") \
   X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
-    "set likelihood: observations per m^2 that no old landmark explains (clutter, newer landmarks)") \
+    "set likelihood: observations per m^2 that no landmark of the hypothesis explains (clutter, newer landmarks)") \
   X(REAL, loop_merge_d2, 0, (GE, 0, 0), "", "--loop-merge-d2", \
     "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)") \
   X(INT, hypothesis_rivals, 0, (CLOSED, 0, 2), "", "--hypothesis-rivals", \

@@ -258,6 +258,7 @@ class Node {
     s.unknown_type = msg_counters_.unknown_type;
     s.invalid_field = msg_counters_.invalid_field;
     s.budget_hits = budget_hits_;
+    s.ambiguous_scans = ambiguous_scans_;
     s.scans = scans_;
     s.instr_predict = last_predict_;
 #define GEOJCBB_STAGE_COUNT_COPY(name, meaning) s.instr_##name = last_.counts.name;
@@ -439,6 +440,7 @@ class Node {
     }
     ++scans_;
     budget_hits_ += last_.diag.node_budget_hit ? 1u : 0u;
+    ambiguous_scans_ += last_.reloc.ambiguous || last_.loop.ambiguous ? 1u : 0u;
     result_.batch_id = m.batch_id;
     result_.count = m.count;
     for (int i = 0; i < last_.count; ++i) {  // <= kMaxObservations
@@ -552,7 +554,8 @@ class Node {
   proto::EncodedFrame frame_;
   Output out_;
   CounterFn clock_ = nullptr;
-  std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, last_predict_ = 0, stack_high_water_ = 0;
+  std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, ambiguous_scans_ = 0, last_predict_ = 0,
+                stack_high_water_ = 0;
   std::uint16_t tx_seq_ = 0, rx_seq_ = 0, last_stream_seq_ = 0, stats_period_ = 0, since_stats_ = 0;
   std::uint8_t rx_type_ = 0;
   bool hello_ = false, configured_ = false, reset_ = false, have_stream_seq_ = false, have_result_ = false;

@@ -1,13 +1,19 @@
-// reloc: the robot's pose from one scan and the map alone (no pose prior), by two-point alignment.
+// reloc: the robot's pose from one scan and the map, by two-point alignment, with or without a pose
+// prior (the filter's estimate; none after a reset that says nothing about the pose).
 // In: observations z_i = (range, bearing) with R_i; the map's landmark means m_j with covariances
 // P_j (AlignWorkspace::push_landmark). Out: the pose world_T_robot, its covariance from the fit, the
 // inlier pairings, and whether the pose is unique (AlignResult).
 //   base pairs   the longest observed pairs (a, b), |q_a - q_b| >= min_base_m, at most base_pairs
 //   matches      every map pair (j, k) with (|q_a - q_b| - |m_j - m_k|)^2 <= chi2(1) s2: two poses
 //                each (a->j, b->k and a->k, b->j), rotation only (det R = +1: no mirror image)
+//   prior        with a prior, a hypothesis outside its gate (prior_gate_d2, 3 dof) is not scored
 //   score        inliers: observations whose world point R q_i + t lies within the 2-dof gate of a
-//                landmark, S = R Sigma_i R^T + P_j (a window of the map sorted by x)
-//   accept       best inliers >= min_inliers and >= the best distinct pose's + margin
+//                landmark, S = R Sigma_i R^T + P_j (a window of the map sorted by x); the kTopPoses
+//                best distinct poses are kept
+//   rank         each kept pose, refined, by its log posterior [nats]: the set likelihood of the scan
+//                there (set_log_likelihood) + the log prior (-d2/2; 0 without a prior)
+//   accept       the best plausible pose (>= min_inliers, inlier ratio) when it leads the best
+//                plausible distinct pose by margin_nats (or has none); else the scan is ambiguous
 //   refine       weighted 2-D Procrustes on the exclusive inliers (2 rounds); covariance
 //                (sum J^T S^-1 J)^-1 with J = [I, dR/dtheta q_i]
 // Bounds: m^2 base-pair choice; base_pairs * n (n - 1) / 2 map pairs; kMaxAlignHypotheses scored
@@ -39,11 +45,29 @@ constexpr int kTopPoses = 4;
 /// Refinement rounds (inliers, then Procrustes).
 constexpr int kRefineRounds = 2;
 
+/// The set likelihood's model of a scan (set_log_likelihood).
+template <typename T>
+struct SetModel {
+  T p_detect = T(0.9);              ///< probability that a landmark in view is observed, (0, 1)
+  T unexplained_density = T(3e-3);  ///< observations per m^2 no landmark of the hypothesis explains
+  bool valid() const {
+    return p_detect > T(0) && p_detect < T(1) && unexplained_density > T(0) && std::isfinite(unexplained_density);
+  }
+};
+
+/// What the prior adds to the filter's covariance: the two-point hypothesis's own error before
+/// refinement, and a filter that drifted somewhat past its covariance (an EKF's estimate is
+/// optimistic after a long drift): 1 m in x and y, 0.2 rad, the alignment's scale of distinct poses.
+template <typename T>
+Mat3<T> hypothesis_floor() {
+  return Vec3<T>(T(1), T(1), T(0.04)).asDiagonal();
+}
+
 template <typename T>
 struct AlignOptions {
   int base_pairs = 4;                 ///< observed pairs tried, 1 .. kMaxBasePairs
   int min_inliers = 5;                ///< a pose needs at least this many inliers, >= 3
-  int margin = 2;                     ///< inliers by which the best pose must lead the best distinct pose, >= 1
+  T margin_nats = T(10);              ///< log posterior by which the best pose must lead the best distinct pose
   T gate_d2 = T(13.815510557964274);  ///< inlier test, chi2inv(0.999, 2)
   T pair_d2 = T(10.827566170662733);  ///< pair distance test, chi2inv(0.999, 1)
   T min_base_m = T(2);                ///< shorter observed pairs fix the heading too poorly [m]
@@ -56,10 +80,18 @@ struct AlignOptions {
   T half_fov_rad = kPi<T>;
   /// A pose is plausible when its inliers are at least this share of inliers + misses.
   T min_inlier_ratio = T(0.6);
+  /// The set likelihood's model (detection probability, density of unexplained observations).
+  SetModel<T> model{};
+  /// The pose prior N(prior_mean, prior_info^-1) (set_prior); has_prior false: pose-free.
+  bool has_prior = false;
+  Pose2<T> prior_mean{};
+  Mat3<T> prior_info = Mat3<T>::Zero();
+  T prior_gate_d2 = T(25.9);  ///< hypotheses scored within this prior d2, chi2inv(1 - 1e-5, 3)
 
   bool valid() const {
-    return base_pairs >= 1 && base_pairs <= kMaxBasePairs && min_inliers >= 3 && margin >= 1 && gate_d2 > T(0) &&
-           pair_d2 > T(0) && min_base_m >= T(0) && distinct_m > T(0) && distinct_rad > T(0) && std::isfinite(gate_d2) &&
+    return base_pairs >= 1 && base_pairs <= kMaxBasePairs && min_inliers >= 3 && margin_nats >= T(0) &&
+           std::isfinite(margin_nats) && model.valid() && all_finite(prior_info) && gate_d2 > T(0) && pair_d2 > T(0) &&
+           min_base_m >= T(0) && distinct_m > T(0) && distinct_rad > T(0) && std::isfinite(gate_d2) &&
            std::isfinite(pair_d2) && std::isfinite(min_base_m) && std::isfinite(distinct_m) &&
            std::isfinite(distinct_rad) && min_range_m >= T(0) && max_range_m >= T(0) && half_fov_rad > T(0) &&
            min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m);
@@ -68,9 +100,11 @@ struct AlignOptions {
 /// AlignOptions' members that are options of the table, (member, option), besides min_inliers:
 /// the relocaliser's is reloc_min_inliers, the loop check's loop_min_inliers (bind_options,
 /// bind_loop_options). The other members are constants of the alignment.
-#define GEOJCBB_ALIGN_OPTIONS(F)  \
-  F(base_pairs, reloc_base_pairs) \
-  F(margin, reloc_margin) F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad)
+#define GEOJCBB_ALIGN_OPTIONS(F)                                                        \
+  F(base_pairs, reloc_base_pairs)                                                       \
+  F(margin_nats, reloc_margin_nats)                                                     \
+  F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad) \
+      F(model.p_detect, loop_detection_probability) F(model.unexplained_density, loop_unexplained_density)
 /// The relocaliser's alignment from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
 template <class In, typename T>
 void bind_options(const In& in, AlignOptions<T>& out) {
@@ -92,6 +126,9 @@ struct AlignResult {
   int inliers = 0;                ///< of the best pose (after refinement when accepted)
   int misses = 0;                 ///< of the best pose: landmarks in view there, not observed
   int rival_inliers = 0;          ///< of the best plausible pose distinct from it (0: none)
+  T score = T(0);                 ///< the best plausible pose's log posterior [nats] (-inf: none)
+  T rival_score = T(0);           ///< its rival's (-inf: none)
+  bool ambiguous = false;         ///< a plausible rival within margin_nats: nothing accepted
   int hypotheses = 0;             ///< poses scored
   bool truncated = false;         ///< kMaxAlignHypotheses reached before every match was scored
   /// Per observation: the map index (push order) it pairs with at the answer, or -1.
@@ -124,6 +161,7 @@ struct AlignWorkspace {
   std::array<Mat3<T>, kTopPoses> top_cov;  ///< the refined poses' fit covariances
   std::array<int, kTopPoses> top_misses;
   std::array<bool, kTopPoses> top_plausible;
+  std::array<T, kTopPoses> top_score;  ///< the refined poses' log posteriors [nats]
   std::array<T, kMaxBasePairs> base_len;
 
   /// Per observation: left out of the alignment (no base pair, never an inlier, no term of the set
@@ -157,6 +195,35 @@ bool distinct(const Pose2<T>& a, const Pose2<T>& b, const AlignOptions<T>& opt) 
   const T dx = a.x - b.x, dy = a.y - b.y;
   return dx * dx + dy * dy > opt.distinct_m * opt.distinct_m ||
          std::abs(wrap_angle(a.theta - b.theta)) > opt.distinct_rad;
+}
+
+/// Sets the pose prior N(mean, P + hypothesis_floor()). @return false (no prior set: pose-free)
+/// when P is not finite or the sum is not positive definite.
+template <typename T>
+bool set_prior(const Pose2<T>& mean, const Mat3<T>& P, AlignOptions<T>& opt) {
+  opt.has_prior = false;
+  if (!all_finite(P) || !std::isfinite(mean.x) || !std::isfinite(mean.y) || !std::isfinite(mean.theta)) return false;
+  const Mat3<T> A = T(0.5) * (P + P.transpose()) + hypothesis_floor<T>();
+  // Positive definite by its leading minors; the inverse by cofactors (3 x 3, symmetric).
+  const T m2 = A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1);
+  const T c00 = A(1, 1) * A(2, 2) - A(1, 2) * A(1, 2), c01 = A(0, 2) * A(1, 2) - A(0, 1) * A(2, 2);
+  const T c02 = A(0, 1) * A(1, 2) - A(0, 2) * A(1, 1), c11 = A(0, 0) * A(2, 2) - A(0, 2) * A(0, 2);
+  const T c12 = A(0, 1) * A(0, 2) - A(0, 0) * A(1, 2), c22 = m2;
+  const T det = A(0, 0) * c00 + A(0, 1) * c01 + A(0, 2) * c02;
+  if (!(A(0, 0) > T(0)) || !(m2 > T(0)) || !(det > T(0))) return false;
+  opt.prior_info << c00, c01, c02, c01, c11, c12, c02, c12, c22;
+  opt.prior_info /= det;
+  opt.prior_mean = mean;
+  opt.has_prior = all_finite(opt.prior_info);
+  return opt.has_prior;
+}
+
+/// The prior's d2 of pose x (heading difference wrapped); 0 without a prior.
+template <typename T>
+T prior_d2(const AlignOptions<T>& opt, const Pose2<T>& x) {
+  if (!opt.has_prior) return T(0);
+  const Vec3<T> e(x.x - opt.prior_mean.x, x.y - opt.prior_mean.y, wrap_angle(x.theta - opt.prior_mean.theta));
+  return e.dot(opt.prior_info * e);
 }
 
 namespace align_detail {
@@ -341,6 +408,36 @@ template <typename T, class B>
 
 }  // namespace align_detail
 
+/// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
+/// at pose x, over the map in ws and the observations align() prepared (ws.q, ws.S):
+///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
+///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
+/// Bound: m + n.
+template <typename T, class B>
+[[gnu::noinline]] T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x,
+                                       const AlignOptions<T>& view, const SetModel<T>& model) {
+  using namespace align_detail;
+  const Mat2<T> Rot = rotation(x.theta);
+  const T log_2pi = std::log(T(2) * kPi<T>);
+  T ll = T(0);
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.skip[i]) continue;
+    if (ws.pick[i] < 0) {
+      ll += std::log(model.unexplained_density);
+      continue;
+    }
+    const int j = ws.pick[i];
+    const Vec2<T> e = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[j];
+    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[j];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0))) return -std::numeric_limits<T>::infinity();
+    const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
+    ll += std::log(model.p_detect) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det);
+  }
+  const int missed = view.max_range_m > T(0) ? misses(ws, m, x, view) : 0;
+  return ll + T(missed) * std::log(T(1) - model.p_detect);
+}
+
 /// Exclusive inliers of pose x: each observation its nearest landmark in the gate; a landmark
 /// taken twice keeps the observation with the smaller d2. Bound: m nearest() calls + m^2.
 template <typename T, class B>
@@ -514,6 +611,7 @@ template <typename T, class B>
           const Vec2<T> t = mid_m - rotation(x.theta) * mid_q;
           x.x = t.x();
           x.y = t.y();
+          if (opt.has_prior && !(prior_d2(opt, x) <= opt.prior_gate_d2)) continue;  // the prior rules it out
           ++scored;
           // A pose below the second kept can change neither the best nor its rival.
           const int need = kept >= 2 && ws.top[1].inliers > opt.min_inliers ? ws.top[1].inliers : opt.min_inliers;
@@ -523,8 +621,9 @@ template <typename T, class B>
       }
     }
   }
-  // Each kept pose refined (exclusive inliers, Procrustes, Gauss-Newton) and its misses counted;
-  // the best plausible one is the answer, the best plausible one distinct from it its rival.
+  // Each kept pose refined (exclusive inliers, Procrustes, Gauss-Newton), its misses counted and
+  // its log posterior scored; the most probable plausible one is the answer, the most probable
+  // plausible one distinct from it its rival.
   // (From here on nothing fails: `out` is written in place, a local result would take the frame
   // over the controller's 512 bytes.)
   AlignResult<T, B>& r = out;
@@ -532,6 +631,8 @@ template <typename T, class B>
   r.pose = Pose2<T>{};
   r.cov = Mat3<T>::Zero();
   r.inliers = r.misses = r.rival_inliers = 0;
+  r.score = r.rival_score = -std::numeric_limits<T>::infinity();
+  r.ambiguous = false;
   r.hypotheses = scored;
   r.truncated = truncated;
   for (int i = 0; i < m; ++i) r.landmark[i] = -1;  // <= kMaxObservations
@@ -539,6 +640,7 @@ template <typename T, class B>
   std::array<Mat3<T>, kTopPoses>& cov = ws.top_cov;
   std::array<int, kTopPoses>& miss = ws.top_misses;
   std::array<bool, kTopPoses>& plausible = ws.top_plausible;
+  std::array<T, kTopPoses>& post = ws.top_score;
   for (int k = 0; k < kept; ++k) {  // <= kTopPoses
     Candidate<T>& c = ws.top[k];
     bool ok = exclusive_inliers(ws, m, c.pose, opt.gate_d2) >= 3;
@@ -548,12 +650,15 @@ template <typename T, class B>
     }
     c.inliers = exclusive_inliers(ws, m, c.pose, opt.gate_d2);
     miss[k] = opt.max_range_m > T(0) ? misses(ws, m, c.pose, opt) : 0;
-    plausible[k] = ok && c.inliers >= opt.min_inliers && T(c.inliers) >= opt.min_inlier_ratio * T(c.inliers + miss[k]);
-    if (plausible[k] && (best < 0 || better(c, ws.top[best]))) best = k;
+    plausible[k] = ok && c.inliers >= opt.min_inliers &&
+                   T(c.inliers) >= opt.min_inlier_ratio * T(c.inliers + miss[k]) &&
+                   (!opt.has_prior || prior_d2(opt, c.pose) <= opt.prior_gate_d2);
+    post[k] = set_log_likelihood(ws, m, c.pose, opt, opt.model) - T(0.5) * prior_d2(opt, c.pose);
+    if (plausible[k] && (best < 0 || post[k] > post[best])) best = k;
   }
   for (int k = 0; k < kept; ++k) {  // <= kTopPoses
     if (k == best || !plausible[k] || (best >= 0 && !distinct(ws.top[k].pose, ws.top[best].pose, opt))) continue;
-    if (rival < 0 || better(ws.top[k], ws.top[rival])) rival = k;
+    if (rival < 0 || post[k] > post[rival]) rival = k;
   }
   if (kept > 0) {
     const int show = best >= 0 ? best : 0;
@@ -562,7 +667,10 @@ template <typename T, class B>
     r.misses = miss[show];
   }
   r.rival_inliers = rival >= 0 ? ws.top[rival].inliers : 0;
-  if (best >= 0 && r.inliers >= r.rival_inliers + opt.margin) {
+  if (best >= 0) r.score = post[best];
+  if (rival >= 0) r.rival_score = post[rival];
+  r.ambiguous = best >= 0 && rival >= 0 && !(post[best] >= post[rival] + opt.margin_nats);
+  if (best >= 0 && !r.ambiguous) {
     exclusive_inliers(ws, m, ws.top[best].pose, opt.gate_d2);
     r.accepted = true;
     r.cov = cov[best];

@@ -3,11 +3,13 @@
 // settings' loop_age scans). Two hypotheses compete for them:
 //   the association's   its pairs with old landmarks, at the pose fitted to them (the predicted
 //                       pose when it has fewer than two)
-//   the alignment's     reloc::align over the old landmarks alone (pose-free, unique by a margin)
-// each scored at its own pose with the set likelihood (set_log_likelihood): paired terms
-// log p_D - d2/2 - log|2 pi S|/2, log(1 - p_D) for every old landmark in view and not paired, and
-// log(density) for every observation no old landmark explains. When the poses agree, or the
-// association's scores within loop_margin_nats of the alignment's, the association stands. Otherwise the
+//   the alignment's     reloc::align over the old landmarks alone, with the filter's pose as its
+//                       prior (unique by reloc_margin_nats of log posterior)
+// each scored at its own pose by its log posterior: the set likelihood (set_log_likelihood, paired
+// terms log p_D - d2/2 - log|2 pi S|/2, log(1 - p_D) for every old landmark in view and not paired,
+// log(density) for every observation no old landmark explains) plus the log prior of that pose
+// (-d2/2 under the filter's pose and covariance). When the poses agree, or the association's scores
+// within loop_margin_nats of the alignment's, the association stands. Otherwise the
 // alignment's closure is pending: the disputed pairs are held (left unmatched, not augmented) and
 // the closure must win again, with the same correction (alignment pose against the filter's), on
 // loop_confirm_scans scans in a row; then it is committed: the pose block inflated by the correction,
@@ -29,46 +31,6 @@ namespace geojcbb::reloc {
 
 /// Gauss-Newton steps of a hypothesis's pose fit.
 constexpr int kFitSteps = 2;
-
-/// The set likelihood's model of a scan.
-template <typename T>
-struct SetModel {
-  T p_detect = T(0.9);              ///< probability that an old landmark in view is observed, (0, 1)
-  T unexplained_density = T(3e-3);  ///< observations per m^2 no old landmark explains (clutter, newer landmarks)
-  bool valid() const {
-    return p_detect > T(0) && p_detect < T(1) && unexplained_density > T(0) && std::isfinite(unexplained_density);
-  }
-};
-
-/// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
-/// at pose x, over the map in ws and the observations align() prepared (ws.q, ws.S):
-///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
-///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
-/// Bound: m + n.
-template <typename T, class B>
-T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& view,
-                     const SetModel<T>& model) {
-  using namespace align_detail;
-  const Mat2<T> Rot = rotation(x.theta);
-  const T log_2pi = std::log(T(2) * kPi<T>);
-  T ll = T(0);
-  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    if (ws.skip[i]) continue;
-    if (ws.pick[i] < 0) {
-      ll += std::log(model.unexplained_density);
-      continue;
-    }
-    const int j = ws.pick[i];
-    const Vec2<T> e = Rot * ws.q[i] + Vec2<T>(x.x, x.y) - ws.m[j];
-    const Mat2<T> S = Rot * ws.S[i] * Rot.transpose() + ws.P[j];
-    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-    if (!(det > T(0))) return -std::numeric_limits<T>::infinity();
-    const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
-    ll += std::log(model.p_detect) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det);
-  }
-  const int missed = view.max_range_m > T(0) ? misses(ws, m, x, view) : 0;
-  return ll + T(missed) * std::log(T(1) - model.p_detect);
-}
 
 /// The largest pose-free d2 of the pairs in ws.pick at pose x (S = R Sigma R^T + P_j: no pose
 /// uncertainty), 0 without pairs. Bound: m.
@@ -123,10 +85,12 @@ enum class LoopVerdict : std::uint8_t {
 template <typename T>
 struct LoopStats {
   LoopVerdict verdict = LoopVerdict::kNone;
-  T ll_association = T(0), ll_alignment = T(0);   ///< set log-likelihoods [nats] (checked scans)
-  int old_landmarks = 0;                          ///< old landmarks within reach (checked scans)
-  int inliers = 0, rival_inliers = 0;             ///< the alignment's best pose's and its rival's
-  int held = 0;                                   ///< observations held (kPending) or re-paired (kCommitted)
+  /// log posteriors [nats] (checked scans): set log-likelihood + log prior (-d2/2 of the filter's pose)
+  T ll_association = T(0), ll_alignment = T(0);
+  bool ambiguous = false;              ///< the alignment found distinct poses within reloc_margin_nats: no alternative
+  int old_landmarks = 0;               ///< old landmarks within reach (checked scans)
+  int inliers = 0, rival_inliers = 0;  ///< the alignment's best pose's and its rival's
+  int held = 0;                        ///< observations held (kPending) or re-paired (kCommitted)
   Pose2<T> association_pose{}, alignment_pose{};  ///< where each closure was scored (checked scans)
 };
 

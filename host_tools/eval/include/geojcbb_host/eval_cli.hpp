@@ -30,7 +30,7 @@ Subcommand add_convert_victoria_command(CLI::App& app);
 
 /// The flags a subcommand that runs presets shares with the others.
 struct CommonFlags {
-  std::vector<std::string> strategies;  ///< --strategies (empty: the seven presets)
+  std::vector<std::string> strategies;  ///< --strategies (empty: the six papers' presets, PCJCBB and PCJCBB+RL)
   bool oracle = false;                  ///< --truth
   std::string out_dir;                  ///< --out-dir (its default: the value held)
   int jobs = 0;                         ///< --jobs (0: the number of cores)

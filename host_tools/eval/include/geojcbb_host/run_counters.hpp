@@ -18,6 +18,7 @@
   X(evicted, "landmarks_evicted", "landmarks evicted to make room (evict_when_full)") \
   X(budget_hits, "budget_hits", "scans whose JCBB node budget ran out") \
   X(relocalisations, "relocalisations", "poses the relocaliser accepted") \
+  X(ambiguous_scans, "ambiguous_scans", "scans whose alignment (relocaliser or loop check) had distinct poses within the margin: nothing committed") \
   X(loop_commits, "loop_closures_committed", "loop closures the closure check committed (loop_check)") \
   X(loop_held_scans, "loop_scans_held", "scans whose disputed pairs it held (a pending closure)") \
   X(windows, "hypothesis_windows", "hypothesis windows opened") \

@@ -206,32 +206,28 @@ struct Config : Codec<Config> {
   float static_gate_level = 0.0f;  ///< [0, 1)
   bool first_estimates_jacobians = true;
   bool augment = true;
-  bool relocalise = false;                    ///< the pose-free relocaliser
-  float reloc_lost_position_var_m2 = 25.0f;   ///< > 0
-  float reloc_lost_heading_var_rad2 = 0.25f;  ///< > 0
-  std::uint8_t reloc_min_inliers = 5;         ///< >= 3
-  std::uint8_t reloc_margin = 2;              ///< >= 1
-  std::uint8_t reloc_base_pairs = 4;          ///< 1 .. 8
-  float reloc_inflation = 4.0f;               ///< >= 1
-  std::uint8_t reloc_confirm_scans = 1;       ///< 0 .. 16
-  std::uint8_t reloc_lost_failed_scans = 0;   ///< 0: off
-  bool loop_check = false;                    ///< loop closures scored against a pose-free alignment
-  std::uint8_t loop_age = 100;                ///< scans unpaired that make a landmark old, >= 1
-  std::uint8_t loop_min_inliers = 3;          ///< >= 3
-  float loop_search_m = 20.0f;                ///< > 0
-  float loop_search_rad = 0.5f;               ///< (0, pi]
-  float loop_margin_nats = 3.0f;              ///< >= 0
-  std::uint8_t loop_confirm_scans = 2;        ///< 1 .. 16
-  float loop_inflation = 4.0f;                ///< >= 1
-  float loop_detection_probability = 0.9f;    ///< (0, 1)
-  float loop_unexplained_density = 0.003f;    ///< > 0
-  float loop_merge_d2 = 0.0f;                 ///< >= 0 (0: off)
-  std::uint8_t hypothesis_rivals = 0;         ///< pose hypotheses beside the best, 0 (off) .. 2
-  std::uint8_t hypothesis_window_scans = 5;   ///< 1 .. 32
-  float hypothesis_margin_nats = 3.0f;        ///< > 0
-  bool hypothesis_hold = false;               ///< disputed observations held while a window is open
-  bool cluster_first = false;                 ///< each cluster of observations paired as a unit first
-  bool evict_when_full = false;               ///< a full map evicts its least-seen landmark beyond r + d
+  bool relocalise = false;                   ///< the pose-free relocaliser
+  std::uint8_t reloc_min_inliers = 5;        ///< >= 3
+  float reloc_margin_nats = 10.0f;           ///< >= 0
+  std::uint8_t reloc_base_pairs = 4;         ///< 1 .. 8
+  float reloc_inflation = 4.0f;              ///< >= 1
+  std::uint8_t reloc_confirm_scans = 1;      ///< 0 .. 16
+  std::uint8_t reloc_lost_failed_scans = 0;  ///< 0: off
+  bool loop_check = false;                   ///< loop closures scored against a pose-free alignment
+  std::uint8_t loop_age = 100;               ///< scans unpaired that make a landmark old, >= 1
+  std::uint8_t loop_min_inliers = 3;         ///< >= 3
+  float loop_margin_nats = 3.0f;             ///< >= 0
+  std::uint8_t loop_confirm_scans = 2;       ///< 1 .. 16
+  float loop_inflation = 4.0f;               ///< >= 1
+  float loop_detection_probability = 0.9f;   ///< (0, 1)
+  float loop_unexplained_density = 0.003f;   ///< > 0
+  float loop_merge_d2 = 0.0f;                ///< >= 0 (0: off)
+  std::uint8_t hypothesis_rivals = 0;        ///< pose hypotheses beside the best, 0 (off) .. 2
+  std::uint8_t hypothesis_window_scans = 5;  ///< 1 .. 32
+  float hypothesis_margin_nats = 3.0f;       ///< > 0
+  bool hypothesis_hold = false;              ///< disputed observations held while a window is open
+  bool cluster_first = false;                ///< each cluster of observations paired as a unit first
+  bool evict_when_full = false;              ///< a full map evicts its least-seen landmark beyond r + d
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -285,13 +281,9 @@ struct Config : Codec<Config> {
         field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
               "applied at the next RESET"),
         field("augment", &Config::augment, range::one_of(0, 1), "", "0: a fixed map, nothing added"),
-        field("relocalise", &Config::relocalise, range::one_of(0, 1), "", "the pose-free relocaliser when lost"),
-        field("reloc_lost_position_var_m2", &Config::reloc_lost_position_var_m2, range::above(0.0f), "m^2",
-              "lost when P_xx + P_yy reaches this"),
-        field("reloc_lost_heading_var_rad2", &Config::reloc_lost_heading_var_rad2, range::above(0.0f), "rad^2",
-              "lost when P_thth reaches this"),
+        field("relocalise", &Config::relocalise, range::one_of(0, 1), "", "the relocaliser when lost"),
         field("reloc_min_inliers", &Config::reloc_min_inliers, range::at_least(3)),
-        field("reloc_margin", &Config::reloc_margin, range::at_least(1)),
+        field("reloc_margin_nats", &Config::reloc_margin_nats, range::not_below(0.0f), "nats"),
         field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
         field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
         field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
@@ -300,8 +292,6 @@ struct Config : Codec<Config> {
         field("loop_check", &Config::loop_check, range::one_of(0, 1), "", "loop closures checked before commit"),
         field("loop_age", &Config::loop_age, range::at_least(1), "scans", "unpaired this long: an old landmark"),
         field("loop_min_inliers", &Config::loop_min_inliers, range::at_least(3)),
-        field("loop_search_m", &Config::loop_search_m, range::above(0.0f), "m"),
-        field("loop_search_rad", &Config::loop_search_rad, range::interval(0.0f, kPiF, true, false), "rad"),
         field("loop_margin_nats", &Config::loop_margin_nats, range::not_below(0.0f), "nats"),
         field("loop_confirm_scans", &Config::loop_confirm_scans, range::between(1, 16)),
         field("loop_inflation", &Config::loop_inflation, range::not_below(1.0f)),
@@ -618,9 +608,10 @@ struct Stats : Codec<Stats> {
   std::uint32_t unknown_type = 0;
   std::uint32_t bad_version = 0;
   std::uint32_t bad_flags = 0;
-  std::uint32_t invalid_field = 0;  ///< frames whose payload failed validation
-  std::uint32_t budget_hits = 0;    ///< scans that ran out of the JCBB node budget
-  std::uint32_t scans = 0;          ///< scans processed
+  std::uint32_t invalid_field = 0;    ///< frames whose payload failed validation
+  std::uint32_t budget_hits = 0;      ///< scans that ran out of the JCBB node budget
+  std::uint32_t ambiguous_scans = 0;  ///< scans whose alignment had distinct poses within the margin
+  std::uint32_t scans = 0;            ///< scans processed
   std::uint32_t instr_predict = 0;
   // The last scan's step by stage: one field per row of the stage table (stage_counts.h).
 #define GEOJCBB_STATS_STAGE_MEMBER(name, meaning) std::uint32_t instr_##name = 0;
@@ -641,13 +632,16 @@ struct Stats : Codec<Stats> {
         field("invalid_field", &Stats::invalid_field, range::any(), "frames",
               "`MessageCounters`: payloads that failed validation"),
         field("budget_hits", &Stats::budget_hits, range::any(), "scans", "scans that ran out of JCBB nodes"),
+        field("ambiguous_scans", &Stats::ambiguous_scans, range::any(), "scans",
+              "the relocaliser's or loop check's alignment had distinct poses within the margin: nothing committed"),
         field("scans", &Stats::scans, range::any(), "scans", "scans processed"),
         field("instr_predict", &Stats::instr_predict, range::any(), kInstr, "the last odometry's prediction"),
-#define GEOJCBB_STATS_STAGE_FIELD(name, meaning) field("instr_" #name, &Stats::instr_##name, range::any(), kInstr, meaning),
+#define GEOJCBB_STATS_STAGE_FIELD(name, meaning) \
+  field("instr_" #name, &Stats::instr_##name, range::any(), kInstr, meaning),
         GEOJCBB_STAGE_COUNTS(GEOJCBB_STATS_STAGE_FIELD)
 #undef GEOJCBB_STATS_STAGE_FIELD
-        field("stack_high_water_bytes", &Stats::stack_high_water_bytes, range::any(), "B",
-              "0 where the board does not measure it"));
+            field("stack_high_water_bytes", &Stats::stack_high_water_bytes, range::any(), "B",
+                  "0 where the board does not measure it"));
   }
 };
 
@@ -752,9 +746,9 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 152 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 139 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 80 &&
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 84 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
                   AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");

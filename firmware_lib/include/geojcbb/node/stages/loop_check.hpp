@@ -1,8 +1,9 @@
 // node/stages: the loop check (StepSettings::loop_check, reloc/loop.hpp). Its state across scans: the
 // pending closure (wins in a row and its correction) and the agreeing checks in a row.
 //   run()  after the association, while tracking: a scan whose local region holds old landmarks
-//          (supported, unseen for loop_age reviews) has its closure checked against a pose-free
-//          alignment over them; the association is left as it is, has its disputed pairs held, or
+//          (supported, unseen for loop_age reviews) has its closure checked against an alignment
+//          over them with the filter's pose as the prior; the association is left as it is, has its
+//          disputed pairs held, or
 //          gets the alignment's pairs with a Closure for the step to commit
 //   closure_rounds()  a committed closure's pairs ranked for the update's rounds (any stage's closure)
 // Bounds: one align() call, two fits and two scores per checked scan; the rewrite O(m n).
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
@@ -48,8 +50,12 @@ class LoopCheck {
     }
     if (state_.pending == 0 && state_.agreed >= reloc::kLoopSettleScans) return Status::kOk;
     const Pose2<T> xp = map.pose();
-    const T reach = cfg.local_radius_m + cfg.loop_search_m;
-    const reloc::SetModel<T> model{cfg.loop_detection_probability, cfg.loop_unexplained_density};
+    // The old landmarks the prior leaves within reach: the local region widened by the prior's gate
+    // (opt carries the filter's pose as its prior; pose-free, the whole map).
+    const Mat3<T> Pp = map.pose_covariance() + reloc::hypothesis_floor<T>();
+    const T reach = opt.has_prior ? cfg.local_radius_m + std::sqrt(opt.prior_gate_d2 * (Pp(0, 0) + Pp(1, 1)))
+                                  : std::numeric_limits<T>::infinity();
+    const reloc::SetModel<T>& model = opt.model;
     reloc::AlignWorkspace<T, B>& ws = scratch.ws;
     scratch.clear();
     for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
@@ -83,15 +89,16 @@ class LoopCheck {
     const bool fits_as_is = reloc::max_pair_d2(ws, m, xp) <= opt.gate_d2;
     Pose2<T> x_assoc = xp;
     reloc::fit_picked(ws, m, x_assoc);
-    ls.ll_association = reloc::set_log_likelihood(ws, m, x_assoc, opt, model);
+    // Each closure by its log posterior: the set likelihood at its pose plus the prior's -d2/2.
+    ls.ll_association = reloc::set_log_likelihood(ws, m, x_assoc, opt, model) - T(0.5) * reloc::prior_d2(opt, x_assoc);
     ls.association_pose = x_assoc;
-    const T jump2 = (a.pose.x - xp.x) * (a.pose.x - xp.x) + (a.pose.y - xp.y) * (a.pose.y - xp.y);
-    const bool alternative = a.accepted && jump2 <= cfg.loop_search_m * cfg.loop_search_m &&
-                             std::abs(wrap_angle(a.pose.theta - xp.theta)) <= cfg.loop_search_rad;
+    // The prior ruled out what the hard window did before: an accepted alignment is within it.
+    const bool alternative = a.accepted;
+    ls.ambiguous = a.ambiguous;
     const Pose2<T> x_align = a.pose;
     if (alternative) {
       reloc::exclusive_inliers(ws, m, x_align, opt.gate_d2);  // its pairs in pick
-      ls.ll_alignment = reloc::set_log_likelihood(ws, m, x_align, opt, model);
+      ls.ll_alignment = reloc::set_log_likelihood(ws, m, x_align, opt, model) - T(0.5) * reloc::prior_d2(opt, x_align);
       ls.alignment_pose = x_align;
     } else {
       for (int i = 0; i < m; ++i) ws.pick[i] = -1;  // <= kMaxObservations

@@ -1,13 +1,17 @@
 // node/stages: the relocaliser (StepSettings::relocalise). Its state across scans: tracking, lost or
 // confirming, the scans left to confirm, the failed scans in a row, the pose covariance when lost.
-//   localise()  before the association: lost (the pose covariance over a trigger, asked, or failed
-//               scans) -> the scan aligned against the supported landmarks (reloc::align); an accepted
-//               alignment is returned as a Relocation for the step to apply
+//   localise()  before the association: lost (told: SlamStep::lost, RELOCALISE; or failed scans:
+//               evidence, never the covariance alone) -> the scan aligned against the supported
+//               landmarks (reloc::align) with the filter's pose as the prior, unless its position
+//               spread is wider than the map (then pose-free); an accepted alignment is returned as
+//               a Relocation for the step to apply
 //   confirm()   after the update: while confirming, reloc_confirm_scans jointly compatible scans with
 //               reloc_min_inliers pairs make the robot found, one without sends it back (Verdict)
 // Bounds: one align() call and one fit per lost scan; O(m) per tracked scan.
 // docs/relocalisation.md.
 #pragma once
+
+#include <limits>
 
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
@@ -29,6 +33,8 @@ struct RelocStats {
   bool relocalised = false;                      ///< the alignment was accepted: the filter was reset at its pose
   bool found = false;                            ///< this scan confirmed the pose: back to tracking
   bool rejected = false;                         ///< this scan failed the confirmation: lost again
+  bool prior = false;                            ///< the alignment had the filter's pose as its prior (else pose-free)
+  bool ambiguous = false;                        ///< a distinct pose within reloc_margin_nats: nothing accepted
   int inliers = 0, rival_inliers = 0, misses = 0, hypotheses = 0;  ///< of the alignment
 };
 
@@ -48,34 +54,44 @@ class Relocaliser {
   void reset() {
     state_ = Localisation::kTracking;
     failed_scans_ = 0;
+    trust_prior_ = true;
   }
-  /// The user says so (RELOCALISE, SlamStep::lost).
-  void lost() { state_ = Localisation::kLost; }
+  /// The user says so (RELOCALISE, SlamStep::lost): the pose covariance the user set is the prior.
+  void lost() {
+    state_ = Localisation::kLost;
+    trust_prior_ = true;
+  }
   Localisation state() const { return state_; }
 
   /// Before the association. When lost, the scan is aligned against the supported landmarks
   /// (scratch.result); an accepted pose is then fit() for the step to apply, which calls relocalised().
   /// @return kOk; the statuses of AlignWorkspace::push_landmark and reloc::align (nothing changes).
-  [[nodiscard]] Status localise(const AssociationConfig<T, B>& cfg, const reloc::AlignOptions<T>& align,
+  /// `align` gets the scan's prior (reloc::set_prior; none when the position spread is wider than
+  /// the map).
+  [[nodiscard]] Status localise(const AssociationConfig<T, B>& cfg, reloc::AlignOptions<T>& align,
                                 const Observations<T, B>& obs, const MapView<T, B>& map, AlignScratch<T, B>& scratch,
                                 RelocStats& rs) {
     rs = RelocStats{};
     rs.state = state_;
-    if (!cfg.relocalise) return Status::kOk;
-    if (state_ == Localisation::kTracking) {
-      const T pos_var = map.pose_cov(0, 0) + map.pose_cov(1, 1);
-      if (!(pos_var < cfg.reloc_lost_position_var_m2) || !(map.pose_cov(2, 2) < cfg.reloc_lost_heading_var_rad2)) {
-        state_ = Localisation::kLost;
-      }
-    }
-    rs.state = state_;
-    if (state_ != Localisation::kLost) return Status::kOk;
+    if (!cfg.relocalise || state_ != Localisation::kLost) return Status::kOk;
     scratch.clear();
+    Vec2<T> lo(std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity()), hi = -lo;
     for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
       if (!map.supported(k)) continue;
       const Status st = scratch.push(map, k);
       if (st != Status::kOk) return st;
+      lo = lo.cwiseMin(map.mean(k));
+      hi = hi.cwiseMax(map.mean(k));
     }
+    // The prior says where to look, unless the scans declared the pose wrong (lost by failed scans:
+    // the covariance did not show it) or it is wider than the map (a reset that carries no
+    // information: its position sigma against the map's half diagonal).
+    const T spread2 = map.pose_cov(0, 0) + map.pose_cov(1, 1);
+    const T half_diag2 = scratch.ws.n > 0 ? T(0.25) * (hi - lo).squaredNorm() : T(0);
+    if (!trust_prior_ || !(spread2 < half_diag2) || !reloc::set_prior(map.pose(), map.pose_covariance(), align)) {
+      align.has_prior = false;
+    }
+    rs.prior = align.has_prior;
     const Status st = reloc::align(obs, align, scratch.ws, scratch.result);
     if (st != Status::kOk) return st;
     const reloc::AlignResult<T, B>& a = scratch.result;
@@ -84,6 +100,7 @@ class Relocaliser {
     rs.rival_inliers = a.rival_inliers;
     rs.misses = a.misses;
     rs.hypotheses = a.hypotheses;
+    rs.ambiguous = a.ambiguous;
     return Status::kOk;
   }
   /// After localise() with scratch.result.accepted: the accepted pose for the step to apply, with the
@@ -126,6 +143,7 @@ class Relocaliser {
     if (cfg.relocalise && cfg.reloc_lost_failed_scans > 0 && failed_scans_ >= cfg.reloc_lost_failed_scans) {
       state_ = Localisation::kLost;
       failed_scans_ = 0;
+      trust_prior_ = false;  // the scans say the pose is wrong, whatever its covariance says
     }
     bool reject = false;
     if (state_ == Localisation::kConfirming && !skip_confirm_) {
@@ -154,6 +172,7 @@ class Relocaliser {
   int confirm_left_ = 0;
   int failed_scans_ = 0;  ///< scans in a row that paired nothing while tracking (reloc_lost_failed_scans)
   bool skip_confirm_ = false;
+  bool trust_prior_ = true;  ///< lost by being told (the pose covariance is the prior), not by failed scans
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
 };
 
