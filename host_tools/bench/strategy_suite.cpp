@@ -2,7 +2,7 @@
 // joint re-check) on the same generated scenes, from sparse to dense maps, M = 10 .. 32. Per
 // strategy: median / p90 / max microseconds per scan, JCBB nodes, precision, recall and F1 against
 // ground truth, the share of answers failing the joint test, and ratios to plain JCBB in the same
-// run. The packed-covariance round's baseline in the same run: JCBB and GEOJCBB as before it (all
+// run. Packed covariance's baseline in the same run: JCBB and GEOJCBB as before it (all
 // of C checked before the stages; EM stopped by the papers' objective tolerance only).
 // Maps extend beyond the sensor's range (as a SLAM map does), which is what the local region prunes.
 #include <cstdio>
@@ -74,16 +74,16 @@ int run_strategy_suite(const BenchOptions& o) {
   ungrouped.cfg.mutual_exclusion = true;
   ungrouped.cfg.optimal_criterion = true;
   variants.push_back(ungrouped);
-  // The packed-covariance round's baseline: the behaviour before it (full check of C up front; the
+  // Packed covariance's baseline: the behaviour before it (full check of C up front; the
   // papers' EM stop).
   sp.condition_groups = false;
   sp.full_covariance_check = true;
   sp.papers_em = true;
   const std::size_t kJcbbOld = variants.size(), kGeoOld = kJcbbOld + 1;
-  Variant jcbb_old{"JCBB, before the packed-covariance round", {}};
+  Variant jcbb_old{"JCBB, before packed covariance", {}};
   if (make_strategy(Strategy::kJcbb, sp, jcbb_old.cfg) != Status::kOk) return 2;
   variants.push_back(jcbb_old);
-  Variant geo_old{"GEOJCBB, before the packed-covariance round", {}};
+  Variant geo_old{"GEOJCBB, before packed covariance", {}};
   if (make_strategy(Strategy::kGeojcbb, sp, geo_old.cfg) != Status::kOk) return 2;
   variants.push_back(geo_old);
 
@@ -171,7 +171,7 @@ int run_strategy_suite(const BenchOptions& o) {
               << df1 << ',' << fail << '\n';
         }
       }
-      {  // the packed-covariance round's goals, against the baseline in this run
+      {  // packed covariance's goals, against the baseline in this run
         const double jcbb_old_med = quantile(rows[kJcbbOld].us, 0.5);
         const double geo_med = quantile(rows[kGeo].us, 0.5), geo_old_med = quantile(rows[kGeoOld].us, 0.5);
         const double p99_ratio = quantile(rows[kJcbb].us, 0.99) / quantile(rows[kGeo].us, 0.99);
@@ -196,7 +196,7 @@ int run_strategy_suite(const BenchOptions& o) {
     }
   }
   std::printf(
-      "\n# The packed-covariance round: the association's fixed cost, against its baseline in the same run\n\n");
+      "\n# Packed covariance: the association's fixed cost, against its baseline in the same run\n\n");
   std::printf(
       "| map | M | JCBB median speed-up | GEOJCBB median speed-up | GEOJCBB / JCBB median | JCBB / GEOJCBB p99 | "
       "JCBB dF1 | GEOJCBB dF1 |\n|---|---|---|---|---|---|---|---|\n");

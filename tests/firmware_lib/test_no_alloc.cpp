@@ -70,7 +70,7 @@ void check_no_alloc_strategies(int m, int n) {
         sp.groups = k < 0 ? -k : k;
         sp.verify = k < 0;
         sp.seed_min_position_var_m2 = T(1e-3);  // PCJCBB: the seed tried on every scene
-        sp.full_covariance_check = k == 0;      // the packed-covariance round: the full check and the papers' EM stop
+        sp.full_covariance_check = k == 0;      // packed covariance: the full check and the papers' EM stop
         sp.papers_em = k == 0;                  // too (k = 3, -3: C checked where read)
         AssociationConfig<T, B> cfg;
         REQUIRE(make_strategy(static_cast<Strategy>(s), sp, cfg) == Status::kOk);

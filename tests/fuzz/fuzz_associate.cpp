@@ -273,7 +273,7 @@ void run(Input& in) {
           D(r, c) = in.f(D(r, c));
           if (op & 0x40) D(c, r) = D(r, c);
         }
-        // The dense boundary (the packed-covariance round: C is packed): an asymmetric cross entry
+        // The dense boundary (packed covariance: C is packed): an asymmetric cross entry
         // is refused there, and the prediction's C is left as it was.
         const Snapshot<JointCovariance<T, B>> cb(s.pred.C);
         const Status cs = s.pred.C.assign_dense(D);

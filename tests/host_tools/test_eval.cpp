@@ -98,7 +98,7 @@ TEST_CASE("MRCLAM replay: landmark groups, and every measurement scored once") {
   CHECK(r.steps.size() > 1000);
 }
 
-// The MRCLAM round's bound on real data, asserted on measured behaviour: association by ground truth on
+// The MRCLAM bound on real data, asserted on measured behaviour: association by ground truth on
 // robot 3 of each dataset, with the model and landmark rules the report uses (camera and drive
 // calibrated on the same robot in the other dataset), is consistent (time-averaged pose NEES <= 6,
 // 3 if perfect) and maps no landmark twice.

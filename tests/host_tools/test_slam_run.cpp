@@ -29,7 +29,7 @@ TEST_CASE("noise-free env1: every strategy scores F1 = 1 and stays on the truth"
   s.noise_scale = 0.0;
   s.detection_probability = 1.0;
   s.clutter_per_scan = 0.0;
-  for (int k = 0; k <= kStrategyCount; ++k) {  // the last round: association by ground truth
+  for (int k = 0; k <= kStrategyCount; ++k) {  // the last pass: association by ground truth
     RunOptions o;
     o.step.strategy = static_cast<Strategy>(k % kStrategyCount);
     o.oracle = k == kStrategyCount;

@@ -30,7 +30,7 @@ Pose2<double> compose(const Pose2<double>& x, double dx, double dy, double dth) 
 
 }  // namespace
 
-TEST_CASE("vehicle log: increments, a full R, GPS and the mount round-trip through the writer") {
+TEST_CASE("vehicle log: increments, a full R, GPS and the sensor mount-trip through the writer") {
   replay::EventLog log;
   log.meta["sensor_x_m"] = 3.78;
   log.meta["sensor_y_m"] = 0.5;

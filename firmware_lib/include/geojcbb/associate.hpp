@@ -1,19 +1,19 @@
 // The association pipeline: the only file that knows the order of the stages.
 //   validate -> local region + individual gate
 //   -> seed (when the pose is uncertain: the pose-free max clique, tested jointly; the pose-free
-//      consistency round)
+//      consistency )
 //   -> group (none | k-means | DBSCAN | GMM-EM; skipped when seeded)
 //   -> search per group (ICNN | JCBB, one node budget shared by the groups; extends the seed;
 //      RJC instead of JCBB for a large ungrouped scan when asked)
 //   -> merge (mutual exclusion across groups, joint re-check)
 //   -> decline (ambiguous pairings left kUnmatched, when an ambiguity margin is set)
 //   -> verify (pairings outside the answer's largest pairwise consistent subset dropped; the
-//      pose-free consistency round)
+//      pose-free consistency )
 //   -> the answer's joint D2 (computed once, unless the search knows it and nothing changed it)
 //   -> result
 // No heap: all working memory is the caller's AssociationWorkspace; outputs are written only on
-// kOk, at the end, so a stage may check what it reads (C's cross blocks, the packed-covariance
-// round) and still leave them untouched.
+// kOk, at the end, so a stage may check what it reads (C's cross blocks, the packed
+// covariance) and still leave them untouched.
 #pragma once
 
 #include "geojcbb/cluster/group.hpp"
@@ -44,10 +44,10 @@ struct AssociationWorkspace {
   /// Graph nodes of the seed's and the verification's consistency graphs: the verification needs one
   /// per observation.
   static constexpr int kGraphNodes = B::kMaxObservations <= kDefaultGraphNodes ? kDefaultGraphNodes : 128;
-  ConsistencyWorkspace<T, B, kGraphNodes> consistency;      ///< seed and verify (the pose-free consistency round)
+  ConsistencyWorkspace<T, B, kGraphNodes> consistency;      ///< seed and verify (pose-free consistency)
   Hypothesis<B> seed;                                       ///< the seed's hypothesis; verify's scratch
   std::array<std::int8_t, B::kMaxObservations> seed_label;  ///< 1: pairing fixed by the seed
-  RjcWorkspace<B> rjc;  ///< RJC's subsets and tries (the pose-free consistency round)
+  RjcWorkspace<B> rjc;  ///< RJC's subsets and tries (pose-free consistency)
 };
 
 namespace pipeline_detail {

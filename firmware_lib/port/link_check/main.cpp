@@ -1,6 +1,6 @@
 // A bare Cortex-M4F image that links the float pipeline and the consistency stage at the default
 // bounds with picolibc's crt0 and linker script, so the symbol check sees what a real firmware
-// would pull in. It is never run (the board port of the firmware round runs the pipeline under
+// would pull in. It is never run (the board port of the firmware port runs the pipeline under
 // QEMU); inputs live in .bss like a device's.
 #include "geojcbb/consistency_f32.hpp"
 #include "geojcbb/pipeline_f32.hpp"

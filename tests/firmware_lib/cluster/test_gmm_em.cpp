@@ -178,7 +178,7 @@ bool same_groups(const Groups<B>& a, const Groups<B>& b, int m) {
 }
 }  // namespace
 
-// The packed-covariance round: the default start (k-means) and stop (an E-step leaves the groups
+// Packed covariance: the default start (k-means) and stop (an E-step leaves the groups
 // unchanged) return the groups of the start and stop before it (farthest-first seeds, objective
 // tolerance) on mixtures whose groups are clear, in fewer iterations; with a hardness margin, where
 // the groups are not clear (soft responsibilities) the stop is the papers' rule.
@@ -198,7 +198,7 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
     for (int k : {3, 0}) {
       CAPTURE(rep);
       CAPTURE(k);
-      EmOptions<T> papers;  // before the packed-covariance round: farthest-first start, objective tolerance
+      EmOptions<T> papers;  // before packed covariance: farthest-first start, objective tolerance
       papers.stop = EmStop::kObjective;
       papers.start = EmStart::kFarthestFirst;
       Groups<Small> g_papers, g_stable;
@@ -228,7 +228,7 @@ TEST_CASE_TEMPLATE("EM stopped when its groups are stable gives the papers' grou
   CHECK(same_groups(g_papers, g_hard, m));
 }
 
-// The packed-covariance round: EM and its BIC run in the Scalar (float on the controller; the BIC
+// Packed covariance: EM and its BIC run in the Scalar (float on the controller; the BIC
 // was double). Float and double fits of the same points find the same groups and the same K where
 // the data decide them.
 TEST_CASE("EM in float finds the groups and the K of EM in double") {

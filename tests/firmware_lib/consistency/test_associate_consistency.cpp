@@ -1,4 +1,4 @@
-// The consistency stage inside associate() (the pose-free consistency round): verify drops the
+// The consistency stage inside associate() (pose-free consistency): verify drops the
 // pairings of JCBB's answer that are not pairwise consistent (a constructed loop closure where JCBB
 // alone takes a wrong hypothesis); seed uses the pose-free clique when the pose is uncertain (a
 // constructed relocalisation) and is not tried otherwise; the PCJCBB preset; bad options give a

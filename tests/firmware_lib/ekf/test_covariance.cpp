@@ -1,4 +1,4 @@
-// EKF covariance engine (the packed-covariance round): the packed covariance against a dense
+// EKF covariance engine (packed covariance): the packed covariance against a dense
 // reference on random states. Every operation starts from the filter's own state (x, and P read
 // through cov()), the reference applies the textbook dense formula in double, and the filter's
 // result must match it:

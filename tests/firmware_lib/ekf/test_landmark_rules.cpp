@@ -1,4 +1,4 @@
-// EKF landmark life cycle and filter options (the MRCLAM round): an object that moves is removed by the
+// EKF landmark life cycle and filter options (MRCLAM): an object that moves is removed by the
 // static gate; a confirmed landmark missed in view far more often than its own detection rate allows
 // is removed, one seen at its rate is kept; two landmarks 0.15 m apart, the second first seen from
 // near, become two landmarks, not one and not three; known landmarks; first-estimates Jacobians;

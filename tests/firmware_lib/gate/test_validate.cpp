@@ -49,7 +49,7 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
     const char* name;
     Status want;
     std::function<void(Problem<T, B>&, AssociationConfig<T, B>&)> corrupt;
-    /// With C checked where read (the packed-covariance round), when it differs from `want`: kOk
+    /// With C checked where read (packed covariance), when it differs from `want`: kOk
     /// for an entry no test of this scene reads, whose answer must then be the clean input's.
     bool unread_where_read = false;
   };
@@ -65,7 +65,7 @@ TEST_CASE_TEMPLATE("bad input gets a specific status and leaves the output untou
       {"R not positive definite", Status::kNotPositiveDefinite,
        [&](auto& p, auto&) { p.obs.R[4] << T(0.01), T(0.02), T(0.02), T(0.01); }},
       {"R zero", Status::kNotPositiveDefinite, [&](auto& p, auto&) { p.obs.R[4].setZero(); }},
-      // A cross block cannot be asymmetric in the packed C (the packed-covariance round): that is
+      // A cross block cannot be asymmetric in the packed C (packed covariance): that is
       // checked where a dense C comes in (the test "a dense C's asymmetric cross block is refused
       // where it comes in" below). A diagonal block is stored whole and is still validate()'s to
       // check, in both modes.
@@ -185,7 +185,7 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   cfg.local_region = true;
   p->pred.C(3, 0) = std::numeric_limits<T>::quiet_NaN();  // cross term between two candidates inside
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
-  // The check where read (the default, the packed-covariance round): diagonal blocks in the region
+  // The check where read (the default, packed covariance): diagonal blocks in the region
   // at gating, cross blocks when a joint test reads them. One observation: no joint test holds two
   // candidates, so the NaN cross term C(3, 0) inside the region is never read and cannot change the
   // answer.
@@ -201,7 +201,7 @@ TEST_CASE_TEMPLATE("with the local region on, C is validated where it is read: i
   CHECK(associate(p->obs, p->pred, cfg, p->ws, p->out) == Status::kNonFinite);
 }
 
-// The packed-covariance round: C's cross blocks are checked where a joint (or pairwise) test reads
+// Packed covariance: C's cross blocks are checked where a joint (or pairwise) test reads
 // them. A bad entry a test reads gets the same status as the full check's, output untouched; one
 // that no test reads leaves the answer exactly as on the clean input. The full check
 // (CovarianceCheck::kFull) still rejects both.
@@ -305,7 +305,7 @@ TEST_CASE_TEMPLATE("C's cross blocks are validated where the joint test reads th
   CHECK(refused_cases > 100);
 }
 
-// The packed-covariance round: the prediction holds C's lower block triangle, so an asymmetric
+// Packed covariance: the prediction holds C's lower block triangle, so an asymmetric
 // cross block can only come in through a dense C (the C API, the Python binding,
 // BlockCovariance::assign_dense). It is refused there with kNotSymmetric (within validate()'s
 // tolerance it is accepted, the lower entry kept), and the prediction is left as it was; a

@@ -10,8 +10,8 @@
 // Labels by arg max gamma (eq. 9). K is fixed, or chosen in [1, min(MaxGroups, m)] by BIC.
 // Everything in the Scalar T, the BIC included (float on the controller: no soft-float double).
 // Start (EmOptions::start): hard responsibilities to the nearest farthest-first seed, or (default,
-// the packed-covariance round) to the k-means groups from those seeds. Stop (EmOptions::stop): the
-// papers' objective tolerance, or (default, the packed-covariance round) also once the groups are
+// packed covariance) to the k-means groups from those seeds. Stop (EmOptions::stop): the
+// papers' objective tolerance, or (default, packed covariance) also once the groups are
 // stable (core/grouping_options.hpp).
 // Bounds: max_iterations <= kMaxEmIterations per fit (and kMaxKMeansIterations for the k-means
 // start); K fits when choosing by BIC.

@@ -100,7 +100,7 @@ T norm_variance(const Vec2<T>& d, const Mat2<T>& S, T norm) {
 
 /// The distance test of pairings (i, a) and (k, b), a != b. Inputs validated, geometry prepared.
 /// @return kOk; kNonFinite for an entry of C's cross block (a, b) that is not finite (C validated
-///         where it is read, the packed-covariance round; the packed C's cross blocks are
+///         where it is read, packed covariance; the packed C's cross blocks are
 ///         symmetric by storage);
 ///         kNotPositiveDefinite when C's blocks of a and b make Sigma_v's variance negative beyond
 ///         rounding (C not PSD).

@@ -1,5 +1,5 @@
 // core: the options of one association pipeline as plain data. The named strategies (ICNN, JCBB,
-// and the grouped ones of the grouped-association round) are presets of these switches, not
+// and the grouped ones of grouped association) are presets of these switches, not
 // separate code paths.
 #pragma once
 
@@ -19,7 +19,7 @@ enum class SearchMethod : std::uint8_t {
 /// Most RJC tries per scan (AssociationConfig::rjc_tries).
 constexpr int kMaxRjcTries = 64;
 
-/// How much of C validate() checks before the stages run (the packed-covariance round).
+/// How much of C validate() checks before the stages run (packed covariance).
 enum class CovarianceCheck : std::uint8_t {
   /// Each entry of C is checked where a stage reads it: the diagonal blocks of the candidates in the
   /// local region before gating, a cross block when a joint (or pairwise) test reads it. A bad entry
@@ -27,7 +27,7 @@ enum class CovarianceCheck : std::uint8_t {
   /// the answer. O(n) before the stages instead of O(n^2).
   kWhereRead,
   /// Every entry between candidates of the local region, before any stage runs (the behaviour before
-  /// the packed-covariance round; O(n^2) per call).
+  /// packed covariance; O(n^2) per call).
   kFull,
 };
 
@@ -57,7 +57,7 @@ enum class CovarianceCheck : std::uint8_t {
 ///    it is reported new (kNewFeature, its d2 the nearest over the other candidates) instead of
 ///    kUnmatched; a second landmark next to a mapped one can then be mapped when both are seen
 ///    together.
-///  - verify (our addition, the pose-free consistency round): the answer's pairings must also be
+///  - verify (our addition, pose-free consistency): the answer's pairings must also be
 ///    pairwise consistent (consistency/, pose-free distance test). The largest pairwise consistent
 ///    subset of the answer (the max clique of the graph over its own pairings) is kept; the other
 ///    pairings are dropped and their observations left kUnmatched. Dropping rather than replacing
@@ -86,7 +86,7 @@ struct AssociationConfig : StepSettings<T> {
   bool mutual_exclusion = false;
   /// Among hypotheses with the most pairings, the one with the smallest joint d2 (eq. 14).
   bool optimal_criterion = false;
-  /// Our addition (the pose-free consistency round), seed: when the pose is uncertain (the least
+  /// Our addition (pose-free consistency), seed: when the pose is uncertain (the least
   /// Cartesian position variance of a predicted candidate, tr(J_a C_aa J_a^T), is at least
   /// seed_min_position_var_m2), the pose-free clique over the wide-gate pairings is tested jointly
   /// and, when it passes with at least seed_min_pairings pairings, fixed as the prefix of one JCBB

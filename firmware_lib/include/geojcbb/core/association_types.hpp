@@ -51,7 +51,7 @@ struct Observations {
 };
 
 /// The symmetric 2n x 2n covariance C = H P H^T of n candidates (candidate j at rows 2j, 2j + 1),
-/// stored as its lower block triangle (the packed-covariance round): block (a, b), a >= b, a 2 x 2 at
+/// stored as its lower block triangle (packed covariance): block (a, b), a >= b, a 2 x 2 at
 /// a (a + 1) / 2 + b, so (MaxCandidates (MaxCandidates + 1) / 2) blocks instead of (2 MaxCandidates)^2
 /// entries. A cross block (a != b) is stored once: C(r, c) and C(c, r) are the same entry, so a cross
 /// block cannot be asymmetric; a dense C is checked for that where it comes in (assign_dense). A

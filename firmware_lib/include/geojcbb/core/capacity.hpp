@@ -13,7 +13,7 @@ using NodeCount = std::uint32_t;
 
 /// @tparam MaxObservations  observations in one scan (M)
 /// @tparam MaxCandidates    map features offered to one association call (n, after the local region)
-/// @tparam MaxGroups        observation groups (clustering, the grouped-association round)
+/// @tparam MaxGroups        observation groups (clustering, grouped association)
 /// @tparam MaxJcbbNodes     JCBB interpretation-tree nodes per scan (the worst-case cost of a scan)
 /// @tparam MaxLandmarks     landmarks in the EKF map
 template <int MaxObservations, int MaxCandidates, int MaxGroups, NodeCount MaxJcbbNodes, int MaxLandmarks>
@@ -36,7 +36,7 @@ struct Bounds {
 /// Controller-class default: 24 observations per scan, 32 candidates in the local region, 5 groups,
 /// 4000 JCBB nodes per scan, 96 landmarks in the map. The float device loop at these bounds
 /// (node::Node, all memory static) needs about 119 KB of RAM and fits, with a 4 KiB stack, in
-/// 128 KiB (the packed-covariance round: packed covariance P, packed C in the Prediction, O(n)
+/// 128 KiB (packed covariance: packed covariance P, packed C in the Prediction, O(n)
 /// update scratch; the covariance still grows as (3 + 2N)(4 + 2N)/2 floats, and at most 100
 /// landmarks fit).
 /// See docs/firmware.md, "Configurations".

@@ -23,7 +23,7 @@ constexpr int kMaxEmIterations = 50;
 enum class EmStop : std::uint8_t {
   /// The papers' rule: when the objective Q gains less than tolerance * (1 + |Q|), or at the bound.
   kObjective,
-  /// The packed-covariance round: also when the groups (arg max responsibilities, eq. 9) came out
+  /// Packed covariance: also when the groups (arg max responsibilities, eq. 9) came out
   /// the same from stable_iterations consecutive iterations (and, with hard_margin < 1, every
   /// point's largest responsibility is at least 1 - hard_margin): EM's remaining iterations then
   /// mostly refine the components' parameters, not the groups this stage returns. Not a proof that
@@ -35,9 +35,9 @@ enum class EmStop : std::uint8_t {
 /// Where an EM fit starts (cluster/gmm_em.hpp).
 enum class EmStart : std::uint8_t {
   /// Hard responsibilities to the nearest farthest-first seed (cluster/groups.hpp), the start
-  /// before the packed-covariance round.
+  /// before packed covariance.
   kFarthestFirst,
-  /// The packed-covariance round: hard responsibilities from k-means (Lloyd's iterations from the
+  /// Packed covariance: hard responsibilities from k-means (Lloyd's iterations from the
   /// same seeds, no exp or log; the usual EM initialisation): EM starts next to its fixed point.
   kKMeans,
 };

@@ -151,7 +151,7 @@ class Slam {
     return Status::kOk;
   }
 
-  /// Relocalisation (the pose-free consistency round): the robot was carried somewhere unknown. The
+  /// Relocalisation (pose-free consistency): the robot was carried somewhere unknown. The
   /// pose estimate becomes x with covariance Pxx and its correlation with the map is removed (the
   /// map no longer says anything about where the robot is); the map and its covariance are kept.
   /// @return as reset(); nothing changes unless kOk.

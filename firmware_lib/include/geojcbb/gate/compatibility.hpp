@@ -2,7 +2,7 @@
 // (observation i, candidate j) pair:
 //   nu_ij = z_i - h_j (bearing wrapped),  S_ij = C_jj + R_i,  d2_ij = nu_ij^T S_ij^-1 nu_ij <= chi2(a, 2)
 // Output: per observation, its compatible candidates sorted by d2 (nearest first).
-// The packed-covariance round: a pair is first tested against two lower bounds of its d2
+// Packed covariance: a pair is first tested against two lower bounds of its d2
 // (Cauchy-Schwarz: for S PD, d2 >= nu_r^2 / S_rr and d2 >= nu_b^2 / S_bb), with a factor 2 of
 // margin over rounding; a pair they reject is incompatible without its 2x2 inverse. The nearest d2
 // of an unpaired observation (Association::d2) is computed when the answer is written, for those
@@ -41,7 +41,7 @@ bool in_local_region(const AssociationConfig<T, B>& cfg, const Vec2<T>& h) {
 }
 
 /// @tparam PerObservation  candidates held per observation: all of them for the gate's table; the
-///                         merge's repair search holds one (the packed-covariance round: 4.4 KB
+///                         merge's repair search holds one (packed covariance: 4.4 KB
 ///                         less on the M4F).
 template <typename T, class B, int PerObservation = B::kMaxCandidates>
 struct CompatibilityTable {

@@ -3,7 +3,7 @@
 // |bearing| <= pi, R_i symmetric positive definite, C's 2x2 diagonal blocks symmetric and positive
 // semidefinite. C is checked on the candidates inside the local region only (all when the region is
 // off): the call reads nothing else, and the region exists to make a large map cheap.
-// C's cross blocks (the packed-covariance round): with CovarianceCheck::kWhereRead (the default)
+// C's cross blocks (packed covariance): with CovarianceCheck::kWhereRead (the default)
 // they are checked where a stage reads them (IncrementalJoint::try_push, pair_statistic), with the
 // same statuses; with kFull, here, every pair of candidates in the region. The Prediction holds C's
 // lower block triangle (BlockCovariance), so a cross block is symmetric by storage: kNotSymmetric

@@ -4,7 +4,7 @@
 // complement: O(p^2) for p pairings. Removing the last pairing drops its two rows: O(1). Since C_H
 // is PSD and R_i is PD, every new pivot is at least lambda_min(R_i) in exact arithmetic; a
 // non-positive pivot therefore means C is not PSD, and is reported as kNotPositiveDefinite. The
-// packed-covariance round: try_push reads C's cross blocks between the new candidate and the held
+// packed covariance: try_push reads C's cross blocks between the new candidate and the held
 // ones, and (unless told the caller checked all of C) checks each entry it reads is finite: C is
 // validated where the joint test reads it. C is symmetric by storage (BlockCovariance keeps one
 // copy of a cross block; a dense C's asymmetry is refused where it comes in,
@@ -117,7 +117,7 @@ class IncrementalJoint {
     return static_cast<std::size_t>(r) * static_cast<std::size_t>(r + 1) / 2;
   }
 
-  // L, lower triangle packed row by row (row r: entries 0 .. r). The packed-covariance round: half
+  // L, lower triangle packed row by row (row r: entries 0 .. r). Packed covariance: half
   // the square it was.
   std::array<T, static_cast<std::size_t>(kRows) * (kRows + 1) / 2> L_{};
   std::array<T, kRows> y_{};          // L^-1 nu_H

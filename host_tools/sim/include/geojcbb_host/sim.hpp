@@ -50,7 +50,7 @@ struct Scenario {
   /// Multiplies the simulated odometry and measurement noise only; the filter keeps the sigmas
   /// above. 0 gives a noise-free run of a filter that still expects noise.
   double noise_scale = 1.0;
-  /// A kidnap (relocalisation scenes, the pose-free consistency round): at kidnap_t_s the robot is
+  /// A kidnap (relocalisation scenes, pose-free consistency): at kidnap_t_s the robot is
   /// carried by kidnap_move = (dx [m], dy [m], dtheta [rad]) in the world frame, and the filter's
   /// pose covariance is re-set to diag(kidnap_sigma_xy_m^2, kidnap_sigma_xy_m^2,
   /// kidnap_sigma_theta_rad^2) with the estimate left where it was, as a user would after a reset.
