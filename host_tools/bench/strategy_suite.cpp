@@ -195,8 +195,7 @@ int run_strategy_suite(const BenchOptions& o) {
       std::fflush(stdout);
     }
   }
-  std::printf(
-      "\n# Packed covariance: the association's fixed cost, against its baseline in the same run\n\n");
+  std::printf("\n# Packed covariance: the association's fixed cost, against its baseline in the same run\n\n");
   std::printf(
       "| map | M | JCBB median speed-up | GEOJCBB median speed-up | GEOJCBB / JCBB median | JCBB / GEOJCBB p99 | "
       "JCBB dF1 | GEOJCBB dF1 |\n|---|---|---|---|---|---|---|---|\n");

@@ -181,8 +181,7 @@ static void test_bad_inputs(void) {
   s.C[1] += 0.5f; /* C(0, 1) != C(1, 0): candidate 0's own block, refused by the validation */
   CHECK(geojcbb_associate(a, s.m, s.z, s.R, s.n, s.ids, s.h, s.C, &out) == GEOJCBB_NOT_SYMMETRIC);
   make_scene(&s, 4, 4);
-  s.C[2] +=
-      0.5f; /* C(0, 2) != C(2, 0): a cross block, refused as the dense C is packed (packed covariance) */
+  s.C[2] += 0.5f; /* C(0, 2) != C(2, 0): a cross block, refused as the dense C is packed (packed covariance) */
   CHECK(geojcbb_associate(a, s.m, s.z, s.R, s.n, s.ids, s.h, s.C, &out) == GEOJCBB_NOT_SYMMETRIC);
   make_scene(&s, 4, 4);
   s.R[0] = -1.f;

@@ -47,7 +47,7 @@ struct AssociationWorkspace {
   ConsistencyWorkspace<T, B, kGraphNodes> consistency;      ///< seed and verify (pose-free consistency)
   Hypothesis<B> seed;                                       ///< the seed's hypothesis; verify's scratch
   std::array<std::int8_t, B::kMaxObservations> seed_label;  ///< 1: pairing fixed by the seed
-  RjcWorkspace<B> rjc;  ///< RJC's subsets and tries (pose-free consistency)
+  RjcWorkspace<B> rjc;                                      ///< RJC's subsets and tries (pose-free consistency)
 };
 
 namespace pipeline_detail {

@@ -97,14 +97,14 @@ struct AlignOptions {
            min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m);
   }
 };
-/// AlignOptions' members that are options of the table, (member, option), besides min_inliers:
-/// the relocaliser's is reloc_min_inliers, the loop check's loop_min_inliers (bind_options,
-/// bind_loop_options). The other members are constants of the alignment.
-#define GEOJCBB_ALIGN_OPTIONS(F)                                                        \
-  F(base_pairs, reloc_base_pairs)                                                       \
-  F(margin_nats, reloc_margin_nats)                                                     \
-  F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad) \
-      F(model.p_detect, loop_detection_probability) F(model.unexplained_density, loop_unexplained_density)
+/// AlignOptions' members from the table, besides min_inliers (bind_options, bind_loop_options); the rest are constants.
+#define GEOJCBB_ALIGN_OPTIONS(F)    \
+  F(base_pairs, reloc_base_pairs)   \
+  F(margin_nats, reloc_margin_nats) \
+  F(min_range_m, min_range_m)       \
+  F(max_range_m, max_range_m)       \
+  F(half_fov_rad, half_fov_rad)     \
+  F(model.p_detect, loop_detection_probability) F(model.unexplained_density, loop_unexplained_density)
 /// The relocaliser's alignment from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
 template <class In, typename T>
 void bind_options(const In& in, AlignOptions<T>& out) {
