@@ -336,7 +336,11 @@ Subcommand add_sim_command(CLI::App& app) {
                 const std::string fam =
                     o->family.empty() ? fams[static_cast<std::size_t>(k) % fams.size()].name : o->family;
                 const std::uint64_t seed = o->world_seed + static_cast<std::uint64_t>(k);
-                const std::string path = dir + "/" + fam + "_" + std::to_string(seed) + ".json";
+                std::string path = dir + "/";
+                path += fam;
+                path += '_';
+                path += std::to_string(seed);
+                path += ".json";
                 save_scenario(draw_world(fam, seed), path);
                 o->scenarios.push_back(path);
                 o->world_family.push_back(fam);

@@ -61,6 +61,7 @@ std::vector<FamilyRow> non_inferiority(const std::vector<WorldOutcome>& worlds) 
       if (w.family == f) ws.push_back(&w);
     rows.push_back(row_of(f, ws));
   }
+  all.reserve(worlds.size());
   for (const WorldOutcome& w : worlds) all.push_back(&w);
   rows.push_back(row_of("total", all));
   return rows;

@@ -167,11 +167,7 @@ class SlamStep {
     close_.commit = false;
     const bool tracking = reloc_.state() == Localisation::kTracking;
     if (!override && cfg_.loop_check && tracking) {
-      // The filter's pose is the loop check's prior (no hard search window); the window and clusters
-      // first still align without it.
-      (void)reloc::set_prior(slam_.pose(), slam_.pose_covariance(), loop_align_);
       st = loop_.run(cfg_, loop_align_, obs, pred_, map, scratch_, assoc_, loop_stats_, close_);
-      loop_align_.has_prior = false;
       if (st != Status::kOk) return st;
     }
     const std::uint32_t t_loop = clock ? clock() : 0;

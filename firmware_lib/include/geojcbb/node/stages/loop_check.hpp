@@ -25,17 +25,26 @@ template <typename T, class B>
 class LoopCheck {
  public:
   void reset() { state_ = reloc::LoopState<T>{}; }
+  /// Drops the prior when run() returns, whichever way.
+  struct PriorScope {
+    reloc::AlignOptions<T>& opt;
+    ~PriorScope() { opt.has_prior = false; }
+  };
   /// A closure is pending: the window keeps out of the way (SlamStep passes it on).
   bool pending() const { return state_.pending > 0; }
 
   /// One tracked scan (the step calls it with loop_check on and the robot tracking).
   /// @return kOk; kInvalidInput for a count mismatch; the statuses of AlignWorkspace::push_landmark
   ///         and reloc::align (then `assoc` unchanged).
-  [[nodiscard]] Status run(const AssociationConfig<T, B>& cfg, const reloc::AlignOptions<T>& opt,
+  /// `opt` carries the filter's pose as the prior during the call (no hard search window); it is
+  /// pose-free again on return (the window and clusters first still align without it).
+  [[nodiscard]] Status run(const AssociationConfig<T, B>& cfg, reloc::AlignOptions<T>& opt,
                            const Observations<T, B>& obs, const Prediction<T, B>& pred, const MapView<T, B>& map,
                            AlignScratch<T, B>& scratch, Association<T, B>& assoc, reloc::LoopStats<T>& ls,
                            Closure<T>& close) {
     if (assoc.count != obs.count) return Status::kInvalidInput;
+    (void)reloc::set_prior(map.pose(), map.pose_covariance(), opt);
+    const PriorScope pose_free_on_return{opt};
     ls = reloc::LoopStats<T>{};
     close.commit = false;
     auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.supported(k); };
