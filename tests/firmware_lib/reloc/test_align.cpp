@@ -175,6 +175,40 @@ TEST_CASE_TEMPLATE("reloc: the true pose is found on random maps whenever a base
   CHECK(found == clean_runs);
 }
 
+// The evidence test against "not of the map" (AlignOptions::test_unmapped, the relocaliser's): a
+// scan of ground the map has never seen is left unaligned, however many look-alike poses a dense map
+// offers; the true pose of a mapped scan still passes, pose-free and under a reset's wide prior.
+TEST_CASE_TEMPLATE("reloc: a scan of unmapped ground is not aligned; a mapped one still is", T, float, double) {
+  int coincidences = 0, mapped = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    const World w = make_world(seed, 60, 0, 1.0);
+    if (w.z.size() < 6) continue;
+    // A map of other landmarks, half as dense again and loosely known (0.7 m): the scan's own
+    // landmarks are not in it, but coincidences within the landmarks' uncertainty are many.
+    const World other = make_world(seed + 1000, 90, 0, 0.0);
+    AlignOptions<T> o = align_options<T>();
+    o.free_log_volume = T(std::log(60.0 * 60.0 * 2 * kPi<double>));
+    auto p = load<T>(w, other.map, 0.7);
+    REQUIRE(align(p->obs, o, p->ws, p->out) == Status::kOk);
+    coincidences += p->out.accepted;
+    o.test_unmapped = true;
+    REQUIRE(align(p->obs, o, p->ws, p->out) == Status::kOk);
+    CAPTURE(seed);
+    CHECK(!p->out.accepted);
+    auto q = load<T>(w, w.map);
+    REQUIRE(align(q->obs, o, q->ws, q->out) == Status::kOk);
+    const bool pose_free = q->out.accepted && pose_error_m(to_double(q->out.pose), w.pose) < 0.3;
+    // A reset: 15 m and pi rad of sigma around an estimate 8 m off.
+    const Pose2<T> guess{T(w.pose.x + 6), T(w.pose.y - 5), T(wrap_angle(w.pose.theta + 1.0))};
+    REQUIRE(set_prior(guess, Mat3<T>(Vec3<T>(T(225), T(225), T(9.87)).asDiagonal()), o));
+    REQUIRE(align(q->obs, o, q->ws, q->out) == Status::kOk);
+    const bool with_prior = q->out.accepted && pose_error_m(to_double(q->out.pose), w.pose) < 0.3;
+    mapped += pose_free && with_prior;
+  }
+  CHECK(coincidences > 0);  // without the test, the dense map offers poses that pass
+  CHECK(mapped >= 30);
+}
+
 TEST_CASE_TEMPLATE("reloc: a mirrored constellation is not accepted", T, float, double) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const World w = make_world(seed, 60, 0, 0.0);

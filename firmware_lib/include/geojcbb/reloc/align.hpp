@@ -86,7 +86,13 @@ struct AlignOptions {
   bool has_prior = false;
   Pose2<T> prior_mean{};
   Mat3<T> prior_info = Mat3<T>::Zero();
-  T prior_gate_d2 = T(25.9);  ///< hypotheses scored within this prior d2, chi2inv(1 - 1e-5, 3)
+  T prior_gate_d2 = T(25.9);   ///< hypotheses scored within this prior d2, chi2inv(1 - 1e-5, 3)
+  T prior_half_logdet = T(0);  ///< log sqrt(det) of the prior's covariance (set_prior)
+  /// The scan against "not of the map" (each observation unexplained): the best pose is accepted
+  /// only when its evidence (log posterior + log sqrt(det) of its fit's covariance - the prior's)
+  /// leads that by margin_nats. Pose-free, the prior is uniform over free_log_volume = log(area 2 pi).
+  bool test_unmapped = false;
+  T free_log_volume = T(0);
 
   bool valid() const {
     return base_pairs >= 1 && base_pairs <= kMaxBasePairs && min_inliers >= 3 && margin_nats >= T(0) &&
@@ -94,7 +100,8 @@ struct AlignOptions {
            min_base_m >= T(0) && distinct_m > T(0) && distinct_rad > T(0) && std::isfinite(gate_d2) &&
            std::isfinite(pair_d2) && std::isfinite(min_base_m) && std::isfinite(distinct_m) &&
            std::isfinite(distinct_rad) && min_range_m >= T(0) && max_range_m >= T(0) && half_fov_rad > T(0) &&
-           min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m);
+           min_inlier_ratio >= T(0) && min_inlier_ratio <= T(1) && std::isfinite(max_range_m) &&
+           std::isfinite(free_log_volume);
   }
 };
 /// AlignOptions' members from the table, besides min_inliers (bind_options, bind_loop_options); the rest are constants.
@@ -129,6 +136,7 @@ struct AlignResult {
   T score = T(0);                 ///< the best plausible pose's log posterior [nats] (-inf: none)
   T rival_score = T(0);           ///< its rival's (-inf: none)
   bool ambiguous = false;         ///< a plausible rival within margin_nats: nothing accepted
+  bool unmapped = false;          ///< test_unmapped: "not of the map" within margin_nats: nothing accepted
   int hypotheses = 0;             ///< poses scored
   bool truncated = false;         ///< kMaxAlignHypotheses reached before every match was scored
   /// Per observation: the map index (push order) it pairs with at the answer, or -1.
@@ -213,6 +221,7 @@ bool set_prior(const Pose2<T>& mean, const Mat3<T>& P, AlignOptions<T>& opt) {
   if (!(A(0, 0) > T(0)) || !(m2 > T(0)) || !(det > T(0))) return false;
   opt.prior_info << c00, c01, c02, c01, c11, c12, c02, c12, c22;
   opt.prior_info /= det;
+  opt.prior_half_logdet = T(0.5) * std::log(det);
   opt.prior_mean = mean;
   opt.has_prior = all_finite(opt.prior_info);
   return opt.has_prior;
@@ -670,7 +679,17 @@ template <typename T, class B>
   if (best >= 0) r.score = post[best];
   if (rival >= 0) r.rival_score = post[rival];
   r.ambiguous = best >= 0 && rival >= 0 && !(post[best] >= post[rival] + opt.margin_nats);
-  if (best >= 0 && !r.ambiguous) {
+  r.unmapped = false;
+  if (best >= 0 && !r.ambiguous && opt.test_unmapped) {
+    T none = T(0);
+    for (int i = 0; i < m; ++i) none += ws.skip[i] ? T(0) : std::log(opt.model.unexplained_density);  // <= m
+    const Mat3<T>& C = cov[best];
+    const T det = C(0, 0) * (C(1, 1) * C(2, 2) - C(1, 2) * C(2, 1)) -
+                  C(0, 1) * (C(1, 0) * C(2, 2) - C(1, 2) * C(2, 0)) + C(0, 2) * (C(1, 0) * C(2, 1) - C(1, 1) * C(2, 0));
+    const T occam = opt.has_prior ? -opt.prior_half_logdet : T(1.5) * std::log(T(2) * kPi<T>) - opt.free_log_volume;
+    r.unmapped = !(det > T(0)) || !(post[best] + T(0.5) * std::log(det) + occam >= none + opt.margin_nats);
+  }
+  if (best >= 0 && !r.ambiguous && !r.unmapped) {
     exclusive_inliers(ws, m, ws.top[best].pose, opt.gate_d2);
     r.accepted = true;
     r.cov = cov[best];

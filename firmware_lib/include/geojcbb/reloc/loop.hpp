@@ -53,19 +53,32 @@ T max_pair_d2(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x) {
 }
 
 /// The pose that best explains the pairs in ws.pick (Procrustes, then kFitSteps Gauss-Newton
-/// steps); `x` unchanged with fewer than two pairs or a failed fit. Bound: (kFitSteps + 1) m.
+/// steps) and its covariance; one pair: x moved onto it, heading kept (cov: the pair's position
+/// covariance, no heading term); `x` and `cov` unchanged without pairs or a failed fit.
+/// Bound: (kFitSteps + 1) m.
 template <typename T, class B>
-void fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x) {
+void fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<T>& cov) {
   using namespace align_detail;
-  int pairs = 0;
-  for (int i = 0; i < m; ++i) pairs += ws.pick[i] >= 0;  // <= kMaxObservations
+  int pairs = 0, last = -1;
+  for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    if (ws.pick[i] >= 0) ++pairs, last = i;
+  }
+  if (pairs == 1) {
+    const int j = ws.pick[last];
+    const Mat2<T> Rot = rotation(x.theta);
+    const Vec2<T> e = ws.m[j] - transform(x, ws.q[last]);
+    x.x += e.x(), x.y += e.y();
+    cov = Mat3<T>::Zero();
+    cov.template topLeftCorner<2, 2>() = Rot * ws.S[last] * Rot.transpose() + ws.P[j];
+  }
   if (pairs < 2) return;
   Pose2<T> y = procrustes(ws, m);
-  Mat3<T> cov;
+  Mat3<T> c;
   for (int k = 0; k < kFitSteps; ++k) {  // <= kFitSteps
-    if (!gauss_newton_step(ws, m, y, cov)) return;
+    if (!gauss_newton_step(ws, m, y, c)) return;
   }
   x = y;
+  cov = c;
 }
 
 /// Agreeing checks after which the closure check rests until the old landmarks leave the region.
@@ -76,17 +89,20 @@ enum class LoopVerdict : std::uint8_t {
   kNone = 0,       ///< not checked (off, lost, no old landmark in the region, or resting)
   kNoAlternative,  ///< checked: the alignment found no unique pose
   kAgreed,         ///< the alignment's pose is the association's
-  kConsistent,     ///< no alternative, and the association's closure fits the pose as it is (pose-free d2)
+  kConsistent,     ///< the association stands: no alternative and its pairs fit the pose as it is (pose-free
+                   ///< d2), or its closure leads by loop_margin_nats with a correction within the distinct scale
   kKept,           ///< they differ, and the association's closure scores within the margin
-  kPending,        ///< the alignment's closure wins, not yet confirmed: disputed pairs held
-  kCommitted,      ///< the alignment's closure won confirm_scans times: committed
+  kPending,        ///< a closure wins (as kCommitted), not yet confirmed: disputed pairs held
+  kCommitted,      ///< a closure (the alignment's, or the association's with loop_min_inliers pairs) won
+                   ///< confirm_scans times: committed
 };
 
 template <typename T>
 struct LoopStats {
   LoopVerdict verdict = LoopVerdict::kNone;
-  /// log posteriors [nats] (checked scans): set log-likelihood + log prior (-d2/2 of the filter's pose)
-  T ll_association = T(0), ll_alignment = T(0);
+  /// log posteriors [nats] (checked scans): set log-likelihood + log prior (-d2/2 of the filter's pose);
+  /// ll_none: no closure (the scan's observations unexplained, the old landmarks in view missed)
+  T ll_association = T(0), ll_alignment = T(0), ll_none = T(0);
   bool ambiguous = false;              ///< the alignment found distinct poses within reloc_margin_nats: no alternative
   int old_landmarks = 0;               ///< old landmarks within reach (checked scans)
   int inliers = 0, rival_inliers = 0;  ///< the alignment's best pose's and its rival's

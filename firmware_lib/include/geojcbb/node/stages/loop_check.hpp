@@ -2,9 +2,10 @@
 // pending closure (wins in a row and its correction) and the agreeing checks in a row.
 //   run()  after the association, while tracking: a scan whose local region holds old landmarks
 //          (supported, unseen for loop_age reviews) has its closure checked against an alignment
-//          over them with the filter's pose as the prior; the association is left as it is, has its
-//          disputed pairs held, or
-//          gets the alignment's pairs with a Closure for the step to commit
+//          over them with the filter's pose as the prior; three hypotheses (no closure, the
+//          association's, the alignment's) by their log posteriors: the association is left as it
+//          is, has its disputed pairs held, or a Closure (the alignment's pairs, or the association's
+//          own with loop_min_inliers pairs) is confirmed and handed to the step to commit
 //   closure_rounds()  a committed closure's pairs ranked for the update's rounds (any stage's closure)
 // Bounds: one align() call, two fits and two scores per checked scan; the rewrite O(m n).
 // docs/relocalisation.md ("Loop closures").
@@ -85,9 +86,11 @@ class LoopCheck {
     ls.old_landmarks = ws.n;
     ls.inliers = a.inliers;
     ls.rival_inliers = a.rival_inliers;
+    // No closure: every observation unexplained, every old landmark in view missed, at the pose as it is.
+    for (int i = 0; i < m; ++i) ws.pick[i] = -1;  // <= kMaxObservations
+    ls.ll_none = reloc::set_log_likelihood(ws, m, xp, opt, model);
     // The association's closure: its pairs with old landmarks, as sorted map indices.
     for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-      ws.pick[i] = -1;
       const int k = map.slot_of(assoc.feature[i]);
       if (k < 0 || !old(k)) continue;
       for (int s = 0; s < ws.n; ++s) {  // <= kMaxLandmarks
@@ -97,7 +100,10 @@ class LoopCheck {
     // Consistent with the pose as it is, without the pose's (perhaps overconfident) covariance.
     const bool fits_as_is = reloc::max_pair_d2(ws, m, xp) <= opt.gate_d2;
     Pose2<T> x_assoc = xp;
-    reloc::fit_picked(ws, m, x_assoc);
+    Mat3<T> cov_assoc = Mat3<T>::Zero();
+    reloc::fit_picked(ws, m, x_assoc, cov_assoc);
+    int assoc_pairs = 0;
+    for (int i = 0; i < m; ++i) assoc_pairs += ws.pick[i] >= 0;  // <= kMaxObservations
     // Each closure by its log posterior: the set likelihood at its pose plus the prior's -d2/2.
     ls.ll_association = reloc::set_log_likelihood(ws, m, x_assoc, opt, model) - T(0.5) * reloc::prior_d2(opt, x_assoc);
     ls.association_pose = x_assoc;
@@ -118,27 +124,35 @@ class LoopCheck {
       state_.agreed = std::min(state_.agreed + 1, reloc::kLoopSettleScans);
       return Status::kOk;
     }
-    if (!alternative && fits_as_is) {
-      ls.verdict = reloc::LoopVerdict::kConsistent;
+    const T margin = cfg.loop_margin_nats;
+    // Three hypotheses, each by its log posterior: no closure, the association's, the alignment's.
+    // One that leads both others by the margin is taken (the association's only with as many pairs
+    // as the alignment needs: fewer fix no pose); none: the disputed observations are held.
+    const T ll_align = alternative ? ls.ll_alignment : -std::numeric_limits<T>::infinity();
+    const bool by_association =
+        assoc_pairs >= cfg.loop_min_inliers && ls.ll_association >= std::max(ls.ll_none, ll_align) + margin;
+    const bool by_alignment = ll_align >= std::max(ls.ll_none, ls.ll_association) + margin;
+    if ((!alternative && fits_as_is) || (by_association && !reloc::distinct(x_assoc, xp, opt))) {
+      ls.verdict = reloc::LoopVerdict::kConsistent;  // the association stands (a correction within 1 m, 0.2 rad)
       state_.pending = 0;
       return Status::kOk;
     }
     state_.agreed = 0;
     bool commit_now = false;
-    if (!alternative || !(ls.ll_alignment >= ls.ll_association + cfg.loop_margin_nats)) {
-      // No closure is unique and best: the association's is held too.
+    const Pose2<T> xw = by_association ? x_assoc : x_align;
+    if (!by_association && !by_alignment) {
       ls.verdict = alternative ? reloc::LoopVerdict::kKept : reloc::LoopVerdict::kNoAlternative;
       state_.pending = 0;
-    } else {
-      const bool same = state_.pending > 0 && !reloc::distinct(reloc::corrected(state_.correction, xp), x_align, opt);
+    } else {  // a correction beyond the distinct scale: confirmed, then committed as a closure
+      const bool same = state_.pending > 0 && !reloc::distinct(reloc::corrected(state_.correction, xp), xw, opt);
       state_.pending = same ? state_.pending + 1 : 1;
-      state_.correction = reloc::correction_between(xp, x_align);
+      state_.correction = reloc::correction_between(xp, xw);
       commit_now = state_.pending >= cfg.loop_confirm_scans;
       ls.verdict = commit_now ? reloc::LoopVerdict::kCommitted : reloc::LoopVerdict::kPending;
     }
     // The disputed observations (paired with an old landmark by either closure): held, or paired
-    // as the committed closure says.
-    for (int i = 0; i < m; ++i) {  // <= kMaxObservations
+    // as the committed closure says (the association's: as they are).
+    for (int i = 0; i < m && !(commit_now && by_association); ++i) {  // <= kMaxObservations
       const int k = map.slot_of(assoc.feature[i]);
       const bool disputed = ws.pick[i] >= 0 || (k >= 0 && old(k));
       if (!disputed) continue;
@@ -150,13 +164,13 @@ class LoopCheck {
       }
     }
     if (!commit_now) return Status::kOk;
-    const T dx = x_align.x - xp.x, dy = x_align.y - xp.y, dth = wrap_angle(x_align.theta - xp.theta);
-    Mat3<T> Q = a.cov;
+    const T dx = xw.x - xp.x, dy = xw.y - xp.y, dth = wrap_angle(xw.theta - xp.theta);
+    Mat3<T> Q = by_association ? cov_assoc : a.cov;
     Q(0, 0) += dx * dx;
     Q(1, 1) += dy * dy;
     Q(2, 2) += dth * dth;
     close.Q = cfg.loop_inflation * Q;
-    close.at = x_align;
+    close.at = xw;
     close.commit = true;
     state_ = reloc::LoopState<T>{};
     ls.verdict = reloc::LoopVerdict::kCommitted;

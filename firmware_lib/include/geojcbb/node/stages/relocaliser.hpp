@@ -35,6 +35,7 @@ struct RelocStats {
   bool rejected = false;                         ///< this scan failed the confirmation: lost again
   bool prior = false;                            ///< the alignment had the filter's pose as its prior (else pose-free)
   bool ambiguous = false;                        ///< a distinct pose within reloc_margin_nats: nothing accepted
+  bool unmapped = false;                         ///< "not of the map" within reloc_margin_nats: nothing accepted
   int inliers = 0, rival_inliers = 0, misses = 0, hypotheses = 0;  ///< of the alignment
 };
 
@@ -92,7 +93,11 @@ class Relocaliser {
       align.has_prior = false;
     }
     rs.prior = align.has_prior;
+    align.test_unmapped = true;  // a kidnap onto ground the map has not seen is not a coincidence elsewhere
+    const Vec2<T> ext = (hi - lo).cwiseMax(Vec2<T>::Constant(T(1)));
+    align.free_log_volume = std::log(ext.x() * ext.y() * T(2) * kPi<T>);
     const Status st = reloc::align(obs, align, scratch.ws, scratch.result);
+    align.test_unmapped = false;
     if (st != Status::kOk) return st;
     const reloc::AlignResult<T, B>& a = scratch.result;
     rs.aligned = true;
@@ -101,6 +106,7 @@ class Relocaliser {
     rs.misses = a.misses;
     rs.hypotheses = a.hypotheses;
     rs.ambiguous = a.ambiguous;
+    rs.unmapped = a.unmapped;
     return Status::kOk;
   }
   /// After localise() with scratch.result.accepted: the accepted pose for the step to apply, with the
