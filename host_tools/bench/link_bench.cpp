@@ -97,7 +97,7 @@ namespace {
 int run(int argc, char** argv) {
   CLI::App app{"link_bench: end-to-end scans per second over the serial link, against the in-process step"};
   std::string scenario = std::string(GEOJCBB_SCENARIO_DIR) + "/dense.json";
-  std::vector<std::string> names{"GEOJCBB", "JCBB"};
+  std::vector<std::string> names{"PCJCBB+RL", "GEOJCBB", "JCBB"};
   std::vector<int> windows{1, 8};
   int runs = 5, max_obs = 20, pings = 2000, repeats = 3;
   std::uint64_t seed = 1;

@@ -36,7 +36,8 @@ int run(int argc, char** argv) {
   app.add_flag("--list-ports", list_only, "print the serial ports libserialport finds and exit");
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
   app.add_option("--strategies", names,
-                 std::string("strategies, comma separated (") + kPresetsHelp + "; default: the papers' six)")
+                 std::string("strategies, comma separated (") + kPresetsHelp +
+                     "; default: the papers' six, PCJCBB and the robust preset PCJCBB+RL)")
       ->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
   app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);
@@ -55,7 +56,7 @@ int run(int argc, char** argv) {
     const Scenario sc = load_scenario(scenario);
     DeviceLink dl(lc, lc.port.empty());
     std::printf("%s\n", dl.describe().c_str());
-    const std::vector<Method> methods = select_methods(names, false);
+    const std::vector<Method> methods = select_methods(names, true);
     std::printf("%s, seed %llu, streamed over the link, %d scan(s) in flight\n", sc.name.c_str(),
                 static_cast<unsigned long long>(seed), lc.window);
     print_score_header();

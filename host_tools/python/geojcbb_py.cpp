@@ -355,9 +355,9 @@ Options (keywords; OPTIONS lists them; the association reads its own):
           "(keywords; OPTIONS lists them):\n") +
       options_doc() + "Raises GeojcbbError (kInvalidInput for an option outside its range), TypeError.";
   m.def("associate", &associate_py, py::arg("z"), py::arg("R"), py::arg("h"), py::arg("C"), py::arg("ids"),
-        py::arg("strategy") = "GEOJCBB", assoc_doc.c_str());
+        py::arg("strategy") = "PCJCBB", assoc_doc.c_str());
   py::class_<PySlam>(m, "Slam", "One EKF-SLAM step with data association (node::SlamStep<double>).")
-      .def(py::init<const std::string&, const py::kwargs&>(), py::arg("strategy") = "GEOJCBB", slam_doc.c_str())
+      .def(py::init<const std::string&, const py::kwargs&>(), py::arg("strategy") = "PCJCBB+RL", slam_doc.c_str())
       .def("reset", &PySlam::reset, py::arg("x0"), py::arg("P0"),
            "Clears the map. x0 = (x [m], y [m], theta [rad]); P0 (3, 3).")
       .def("predict", &PySlam::predict, py::arg("v_mps"), py::arg("w_radps"), py::arg("dt_s"), py::arg("sigma_v_mps"),

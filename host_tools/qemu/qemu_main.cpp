@@ -160,7 +160,8 @@ int run(int argc, char** argv) {
       ->default_val(q.machine);
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
   app.add_option("--strategies", names,
-                 std::string("strategies, comma separated (") + kPresetsHelp + "; default: the papers' six)")
+                 std::string("strategies, comma separated (") + kPresetsHelp +
+                     "; default: the papers' six, PCJCBB and the robust preset PCJCBB+RL)")
       ->delimiter(',');
   app.add_option("--seed", seed, "simulation seed")->default_val(seed);
   app.add_option("--max-steps", o.max_steps, "control intervals to stream (0: the whole path)")->default_val(0);
@@ -197,7 +198,7 @@ int run(int argc, char** argv) {
                large = matches<LargeControllerBounds>(caps);
     if (check && !small && !dflt && !large)
       throw std::runtime_error("--check: the firmware's bounds are not a known configuration");
-    std::vector<Method> strategies = select_methods(names, false);
+    std::vector<Method> strategies = select_methods(names, true);
     if (worst > 0 && check)
       throw std::runtime_error("--worst-case streams no scenario: it cannot be combined with --check");
     if (worst > 0) {

@@ -21,7 +21,7 @@ r["candidate"], r["d2"], r["pairings"], r["joint_d2"], r["jointly_compatible"], 
 geojcbb.associate(z, R, h, C, ids, strategy="JCBB+V")   # +V: the pairwise verification switched in
 
 # every option of docs/options.md is a keyword (geojcbb.OPTIONS lists them)
-slam = geojcbb.Slam("GEOJCBB", local_radius_m=35.0, max_range_m=30.0, half_fov_rad=1.57)
+slam = geojcbb.Slam("PCJCBB+RL", local_radius_m=35.0, max_range_m=30.0, half_fov_rad=1.57)
 slam.reset(np.zeros(3), np.eye(3) * 1e-4)
 slam.predict(0.5, 0.0, 0.1, 0.05, 0.01)        # v [m/s], w [rad/s], dt [s], their sigmas
 out = slam.step(z, R)      # outcome (list of str), feature, d2, diagnostics

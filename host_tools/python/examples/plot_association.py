@@ -23,7 +23,7 @@ def xy(rb):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=os.path.join(tempfile.mkdtemp(prefix="geojcbb_"), "association.png"))
-    ap.add_argument("--strategy", default="GEOJCBB", choices=geojcbb.STRATEGIES)
+    ap.add_argument("--strategy", default="PCJCBB", choices=geojcbb.STRATEGIES)
     a = ap.parse_args()
     z, R, h, C, ids = make_scene(np.random.default_rng(4), 20, 20)
     r = geojcbb.associate(z, R, h, C, ids, strategy=a.strategy, local_radius_m=20.0)

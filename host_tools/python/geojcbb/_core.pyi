@@ -123,7 +123,7 @@ class AssociationResult(TypedDict):
 
 
 def associate(z: npt.ArrayLike, R: npt.ArrayLike, h: npt.ArrayLike, C: npt.ArrayLike, ids: npt.ArrayLike,
-              strategy: str = "GEOJCBB", **options: Any) -> AssociationResult:
+              strategy: str = "PCJCBB", **options: Any) -> AssociationResult:
     """z (m, 2) [m, rad], R (m, 2, 2) [m^2, rad^2], h (n, 2) [m, rad], C (2n, 2n), ids (n,) >= 0.
 
     strategy: one of STRATEGIES, optionally with "+" and letters of PRESET_SUFFIXES ("PCJCBB+RL"). options: keywords of Options.
@@ -141,7 +141,7 @@ class StepResult(TypedDict):
 class Slam:
     """One EKF-SLAM step with data association (node::SlamStep<double, host bounds>)."""
 
-    def __init__(self, strategy: str = "GEOJCBB", **options: Any) -> None:
+    def __init__(self, strategy: str = "PCJCBB+RL", **options: Any) -> None:
         """strategy: one of STRATEGIES, optionally with "+" and letters of PRESET_SUFFIXES ("PCJCBB+RL"). options: keywords of Options."""
     def reset(self, x0: npt.ArrayLike, P0: npt.ArrayLike) -> None:
         """x0 = (x [m], y [m], theta [rad]); P0 (3, 3) [m^2, rad^2]."""
