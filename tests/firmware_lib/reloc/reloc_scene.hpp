@@ -67,16 +67,17 @@ StepSettings<T> reloc_settings() {
   return s;
 }
 
-/// A step configured with `s`, at pose x0 with covariance P0, the landmarks of `map` known (1e-4 m^2).
+/// A step configured with `s`, at pose x0 with covariance P0, the landmarks of `map` known (1e-4 m^2;
+/// `surveyed`: SlamStep::add_known_landmark's flag).
 template <typename T, class B>
 std::unique_ptr<RelocRig<T, B>> make_known_map_rig(const std::vector<Eigen::Vector2d>& map, const StepSettings<T>& s,
-                                                   const Pose2<double>& x0, const Mat3<T>& P0) {
+                                                   const Pose2<double>& x0, const Mat3<T>& P0, bool surveyed = false) {
   auto rig = std::make_unique<RelocRig<T, B>>();
   REQUIRE(rig->step.configure(s) == Status::kOk);
   REQUIRE(rig->step.reset(Pose2<T>{T(x0.x), T(x0.y), T(x0.theta)}, P0) == Status::kOk);
   for (const auto& l : map) {
     FeatureId id = -1;
-    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+    REQUIRE(rig->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id, surveyed) == Status::kOk);
   }
   return rig;
 }

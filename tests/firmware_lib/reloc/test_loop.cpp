@@ -29,11 +29,12 @@ using Rig = test::RelocRig<T, B>;
 /// The filter at `believed` with a small (overconfident) covariance, the map known.
 template <typename T>
 std::unique_ptr<Rig<T>> make_rig(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& believed,
-                                 bool loop_check = true) {
+                                 bool loop_check = true, bool surveyed = false) {
   StepSettings<T> s = test::reloc_settings<T>();
   s.loop_check = loop_check;
   s.loop_age = 1;
-  auto rig = test::make_known_map_rig<T, B>(map, s, believed, Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal());
+  auto rig =
+      test::make_known_map_rig<T, B>(map, s, believed, Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal(), surveyed);
   rig->obs.clear();
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // every landmark one review unseen: old
   return rig;
@@ -106,6 +107,45 @@ TEST_CASE_TEMPLATE("loop: a drifted filter's closure is held, committed on confi
   CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kConsistent);
   CHECK(rig->out.loop.held == 0);
   for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+}
+
+// A surveyed map (measured, not built by the robot) does not drift with it: re-observing it is
+// localisation, never a loop closure. The drifted scene above, with the map added as surveyed: the
+// check never runs, and the step answers as with the check off. A map added after a step is not
+// surveyed (ids not in a row from the reset); a reset forgets the survey.
+TEST_CASE_TEMPLATE("loop: a surveyed landmark is never old; the check leaves the step as it was", T, float, double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4}, believed{-1.5, -2, 0.48};
+  auto surveyed = make_rig<T>(map, believed, true, true);
+  auto off = make_rig<T>(map, believed, false);
+  observe_from(map, truth, surveyed->obs);
+  observe_from(map, truth, off->obs);
+  for (int k = 0; k < 3; ++k) {
+    REQUIRE(surveyed->step.step(surveyed->obs, surveyed->out) == Status::kOk);
+    REQUIRE(off->step.step(off->obs, off->out) == Status::kOk);
+    CHECK(surveyed->out.loop.verdict == reloc::LoopVerdict::kNone);
+    for (int i = 0; i < surveyed->out.count; ++i) {
+      CHECK(surveyed->out.outcome[i] == off->out.outcome[i]);
+      CHECK(surveyed->out.feature[i] == off->out.feature[i]);
+    }
+    CHECK(surveyed->step.slam().pose().x == off->step.slam().pose().x);
+  }
+  // After a reset the same map added as mapped (the default): the check runs again.
+  auto again = make_rig<T>(map, believed);
+  observe_from(map, truth, again->obs);
+  REQUIRE(again->step.step(again->obs, again->out) == Status::kOk);
+  CHECK(again->out.loop.verdict == reloc::LoopVerdict::kPending);
+  REQUIRE(surveyed->step.reset(Pose2<T>{T(believed.x), T(believed.y), T(believed.theta)},
+                               Vec3<T>(T(0.01), T(0.01), T(1e-4)).asDiagonal()) == Status::kOk);
+  for (const auto& l : map) {
+    FeatureId id = -1;
+    REQUIRE(surveyed->step.add_known_landmark(l.cast<T>(), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
+  }
+  surveyed->obs.clear();
+  REQUIRE(surveyed->step.step(surveyed->obs, surveyed->out) == Status::kOk);
+  observe_from(map, truth, surveyed->obs);
+  REQUIRE(surveyed->step.step(surveyed->obs, surveyed->out) == Status::kOk);
+  CHECK(surveyed->out.loop.verdict == reloc::LoopVerdict::kPending);
 }
 
 TEST_CASE("loop: float and double agree: the same verdicts, pairs and committed pose") {

@@ -102,6 +102,7 @@ class SlamStep {
       merge_.reset();
       tentative_.reset();
       window_.reset();
+      loop_.new_map();
     }
     return st;
   }
@@ -111,18 +112,17 @@ class SlamStep {
   /// The user says the robot is lost (carried, or its pose known to be wrong): with the relocaliser
   /// on (StepSettings::relocalise), each scan from the next on is aligned against the map until a
   /// pose is accepted and confirmed. The relocaliser off: nothing changes.
-  void lost() {
-    if (configured_ && cfg_.relocalise) reloc_.lost();
-  }
+  void lost() { reloc_.lost(configured_ && cfg_.relocalise); }
   Localisation localisation() const { return reloc_.state(); }
   /// Landmarks removed as movers and remembered (tentative_isolated) since reset().
   std::uint32_t movers_caught() const { return tentative_.caught(); }
   /// Movers remembered now (tentative_isolated; at most kMaxMovers).
   int movers() const { return tentative_.movers(); }
 
-  /// A landmark known beforehand (ekf::Slam::add_known_landmark), after reset().
-  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
-    return slam_.add_known_landmark(l, Pll, id);
+  /// A landmark known beforehand (ekf::Slam::add_known_landmark); `surveyed`: see LoopCheck::surveyed.
+  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id, bool surveyed = false) {
+    const Status st = slam_.add_known_landmark(l, Pll, id);
+    return surveyed ? loop_.surveyed(st, id) : st;
   }
 
   /// @return the statuses of ekf::Slam::predict.

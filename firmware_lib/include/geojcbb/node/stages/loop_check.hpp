@@ -26,6 +26,19 @@ template <typename T, class B>
 class LoopCheck {
  public:
   void reset() { state_ = reloc::LoopState<T>{}; }
+  /// A new map (SlamStep::reset): no closure pending, no landmark surveyed.
+  void new_map() {
+    reset();
+    surveyed_end_ = 0;
+  }
+  /// After ekf::Slam::add_known_landmark returned `st` with `id` for a surveyed landmark (a map
+  /// measured, not built by the robot): those added right after the reset (ids 0, 1, .. in a row)
+  /// are never old. It does not drift with the robot: seeing it again localises, closes no loop.
+  /// A map of an earlier session is not surveyed (SlamStep::add_known_landmark's default). @return st
+  Status surveyed(Status st, FeatureId id) {
+    surveyed_end_ += st == Status::kOk && id == surveyed_end_;
+    return st;
+  }
   /// Drops the prior when run() returns, whichever way.
   struct PriorScope {
     reloc::AlignOptions<T>& opt;
@@ -48,7 +61,7 @@ class LoopCheck {
     const PriorScope pose_free_on_return{opt};
     ls = reloc::LoopStats<T>{};
     close.commit = false;
-    auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.supported(k); };
+    auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.supported(k) && map.id(k) >= surveyed_end_; };
     int in_region = 0;
     for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       const int k = map.slot_of(pred.id[a]);
@@ -179,6 +192,7 @@ class LoopCheck {
 
  private:
   reloc::LoopState<T> state_;
+  FeatureId surveyed_end_ = 0;  ///< landmarks with a smaller id are surveyed (surveyed())
 };
 
 /// A committed closure's rounds (the loop check's or the window's): the paired observations ranked by

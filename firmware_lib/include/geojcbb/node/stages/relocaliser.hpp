@@ -58,7 +58,9 @@ class Relocaliser {
     trust_prior_ = true;
   }
   /// The user says so (RELOCALISE, SlamStep::lost): the pose covariance the user set is the prior.
-  void lost() {
+  /// `relocalising` false (the relocaliser off, or not configured): nothing changes.
+  void lost(bool relocalising) {
+    if (!relocalising) return;
     state_ = Localisation::kLost;
     trust_prior_ = true;
   }
