@@ -53,32 +53,31 @@ T max_pair_d2(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x) {
 }
 
 /// The pose that best explains the pairs in ws.pick (Procrustes, then kFitSteps Gauss-Newton
-/// steps) and its covariance; one pair: x moved onto it, heading kept (cov: the pair's position
-/// covariance, no heading term); `x` and `cov` unchanged without pairs or a failed fit.
-/// Bound: (kFitSteps + 1) m.
+/// steps) and its covariance (`cov`: two pairs or more); one pair: x moved onto it, heading kept.
+/// `x` and `cov` unchanged without pairs or on a failed fit. @return the pairs. Bound: (kFitSteps + 1) m.
 template <typename T, class B>
-void fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<T>& cov) {
+int fit_picked(const AlignWorkspace<T, B>& ws, int m, Pose2<T>& x, Mat3<T>& cov) {
   using namespace align_detail;
   int pairs = 0, last = -1;
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
-    if (ws.pick[i] >= 0) ++pairs, last = i;
+    if (ws.pick[i] < 0) continue;
+    ++pairs;
+    last = i;
   }
   if (pairs == 1) {
-    const int j = ws.pick[last];
-    const Mat2<T> Rot = rotation(x.theta);
-    const Vec2<T> e = ws.m[j] - transform(x, ws.q[last]);
-    x.x += e.x(), x.y += e.y();
-    cov = Mat3<T>::Zero();
-    cov.template topLeftCorner<2, 2>() = Rot * ws.S[last] * Rot.transpose() + ws.P[j];
+    const Vec2<T> e = ws.m[ws.pick[last]] - transform(x, ws.q[last]);
+    x.x += e.x();
+    x.y += e.y();
   }
-  if (pairs < 2) return;
+  if (pairs < 2) return pairs;
   Pose2<T> y = procrustes(ws, m);
   Mat3<T> c;
   for (int k = 0; k < kFitSteps; ++k) {  // <= kFitSteps
-    if (!gauss_newton_step(ws, m, y, c)) return;
+    if (!gauss_newton_step(ws, m, y, c)) return pairs;
   }
   x = y;
   cov = c;
+  return pairs;
 }
 
 /// Agreeing checks after which the closure check rests until the old landmarks leave the region.

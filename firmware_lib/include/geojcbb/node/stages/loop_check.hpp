@@ -114,9 +114,7 @@ class LoopCheck {
     const bool fits_as_is = reloc::max_pair_d2(ws, m, xp) <= opt.gate_d2;
     Pose2<T> x_assoc = xp;
     Mat3<T> cov_assoc = Mat3<T>::Zero();
-    reloc::fit_picked(ws, m, x_assoc, cov_assoc);
-    int assoc_pairs = 0;
-    for (int i = 0; i < m; ++i) assoc_pairs += ws.pick[i] >= 0;  // <= kMaxObservations
+    const int assoc_pairs = reloc::fit_picked(ws, m, x_assoc, cov_assoc);
     // Each closure by its log posterior: the set likelihood at its pose plus the prior's -d2/2.
     ls.ll_association = reloc::set_log_likelihood(ws, m, x_assoc, opt, model) - T(0.5) * reloc::prior_d2(opt, x_assoc);
     ls.association_pose = x_assoc;
@@ -165,7 +163,8 @@ class LoopCheck {
     }
     // The disputed observations (paired with an old landmark by either closure): held, or paired
     // as the committed closure says (the association's: as they are).
-    for (int i = 0; i < m && !(commit_now && by_association); ++i) {  // <= kMaxObservations
+    const bool keep_association = commit_now && by_association;
+    for (int i = 0; i < m && !keep_association; ++i) {  // <= kMaxObservations
       const int k = map.slot_of(assoc.feature[i]);
       const bool disputed = ws.pick[i] >= 0 || (k >= 0 && old(k));
       if (!disputed) continue;

@@ -95,11 +95,12 @@ class Relocaliser {
       align.has_prior = false;
     }
     rs.prior = align.has_prior;
-    align.test_unmapped = true;  // a kidnap onto ground the map has not seen is not a coincidence elsewhere
+    // The relocaliser's own options: a kidnap onto ground the map has not seen is no coincidence
+    // elsewhere (pose-free, "not of the map" is uniform over the map's box and every heading).
+    align.test_unmapped = true;
     const Vec2<T> ext = (hi - lo).cwiseMax(Vec2<T>::Constant(T(1)));
     align.free_log_volume = std::log(ext.x() * ext.y() * T(2) * kPi<T>);
     const Status st = reloc::align(obs, align, scratch.ws, scratch.result);
-    align.test_unmapped = false;
     if (st != Status::kOk) return st;
     const reloc::AlignResult<T, B>& a = scratch.result;
     rs.aligned = true;
