@@ -45,7 +45,7 @@ bool SimSource::next(RunInput& in) {
   }
   if (!sim_->step(step_) || (max_steps_ != 0 && k_ >= max_steps_)) return false;
   ++k_;
-  if (step_.kidnapped) {
+  if (step_.kidnapped && sc_.kidnap_told) {  // a silent kidnap: the filter is not told
     kidnap_due_ = true;
     in = RunInput{};
     in.relocalise = true;

@@ -194,8 +194,9 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
                            r.window.verdict == reloc::WindowVerdict::kExpired;
   // The association's time: the relocaliser, the local map, the association and the stages that
   // edit it (not the update).
-  const double assoc_s = 1e-9 * (double(r.counts.relocalise) + double(r.counts.predict_local) +
-                                 double(r.counts.associate) + double(r.counts.loop) + double(r.counts.window));
+  const double assoc_s =
+      1e-9 * (double(r.counts.relocalise) + double(r.counts.predict_local) + double(r.counts.associate) +
+              double(r.counts.loop) + double(r.counts.window) + double(r.counts.lost_test));
   res.association_s += assoc_s;
   res.budget_hits += r.diag.node_budget_hit;
   s.truth.clear();

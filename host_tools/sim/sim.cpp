@@ -111,6 +111,24 @@ Scenario load_scenario(const std::string& path) {
       s.kidnap_sigma_xy_m = k.value("sigma_xy_m", s.kidnap_sigma_xy_m);
       s.kidnap_sigma_theta_rad =
           k.value("sigma_theta_deg", s.kidnap_sigma_theta_rad * 180 / kPi<double>) * kPi<double> / 180;
+      s.kidnap_told = k.value("told", true);
+    }
+    if (j.contains("clutter_burst")) {  // {"t_s", "duration_s", "every_s", "per_scan"}
+      const auto& b = j.at("clutter_burst");
+      s.burst_t_s = b.at("t_s").get<double>();
+      s.burst_duration_s = b.at("duration_s").get<double>();
+      s.burst_every_s = b.value("every_s", 0.0);
+      s.burst_per_scan = b.at("per_scan").get<double>();
+    }
+    for (const auto& m : j.value("movers", nlohmann::json::array())) {  // {"index", "vx_mps", "vy_mps", "period_s"}
+      Scenario::Mover mv;
+      mv.index = m.at("index").get<int>();
+      mv.v = Eigen::Vector2d(m.value("vx_mps", 0.0), m.value("vy_mps", 0.0));
+      mv.period_s = m.at("period_s").get<double>();
+      if (mv.index < 0 || mv.index >= static_cast<int>(s.landmarks.size()) || !mv.v.allFinite() || !(mv.period_s > 0)) {
+        throw std::runtime_error("movers: an index or period is out of range");
+      }
+      s.movers.push_back(mv);
     }
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
@@ -118,10 +136,21 @@ Scenario load_scenario(const std::string& path) {
   if (!(s.dt_s > 0) || s.observe_every < 1 || s.laps < 1 || !(s.duration_s >= 0) || !(s.speed_mps > 0) ||
       !(s.max_range_m > 0) || !(s.min_range_m >= 0 && s.min_range_m < s.max_range_m) || s.detection_probability < 0 ||
       s.detection_probability > 1 || s.clutter_per_scan < 0 || s.noise_scale < 0 || !s.kidnap_move.allFinite() ||
-      !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0)) {
+      !(s.kidnap_sigma_xy_m > 0) || !(s.kidnap_sigma_theta_rad > 0) || !(s.burst_t_s >= 0) ||
+      !(s.burst_duration_s >= 0) || !(s.burst_every_s >= 0) || !(s.burst_per_scan >= 0)) {
     throw std::runtime_error(path + ": a parameter is out of range");
   }
   return s;
+}
+
+Eigen::Vector2d landmark_at(const Scenario& s, std::size_t j, double t_s) {
+  Eigen::Vector2d p = s.landmarks[j];
+  for (const Scenario::Mover& m : s.movers) {
+    if (static_cast<std::size_t>(m.index) != j) continue;
+    const double phase = std::fmod(t_s, m.period_s) / m.period_s;  // out for the first half, back for the second
+    p += m.v * (m.period_s * (phase < 0.5 ? phase : 1 - phase));
+  }
+  return p;
 }
 
 Simulator::Simulator(const Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) {
@@ -161,8 +190,8 @@ bool Simulator::step(SimStep& out) {
   const Eigen::Matrix2d R =
       Eigen::Vector2d(s_.sigma_range_m * s_.sigma_range_m, s_.sigma_bearing_rad * s_.sigma_bearing_rad).asDiagonal();
   for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
-    const Vec2<double> z =
-        observe(x_, Mount<double>{s_.sensor_x_m, s_.sensor_y_m, s_.sensor_theta_rad}, Vec2<double>(s_.landmarks[j]));
+    const Vec2<double> z = observe(x_, Mount<double>{s_.sensor_x_m, s_.sensor_y_m, s_.sensor_theta_rad},
+                                   Vec2<double>(landmark_at(s_, j, out.t_s)));
     if (z.x() > s_.max_range_m || z.x() < s_.min_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
     if (u(rng_) >= s_.detection_probability) continue;
     out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),
@@ -175,6 +204,23 @@ bool Simulator::step(SimStep& out) {
     const double r0 = s_.min_range_m, r1 = s_.max_range_m;
     const double r = std::sqrt(r0 * r0 + (r1 * r1 - r0 * r0) * u(rng_));
     out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1, R});
+  }
+  const double since = out.t_s - s_.burst_t_s;
+  if (s_.burst_per_scan > 0 && since >= 0) {
+    const long burst = s_.burst_every_s > 0 ? static_cast<long>(since / s_.burst_every_s) : 0;
+    const double into = s_.burst_every_s > 0 ? since - static_cast<double>(burst) * s_.burst_every_s : since;
+    if (into < s_.burst_duration_s) {
+      if (burst != burst_) {  // a new burst: its sector
+        burst_ = burst;
+        burst_bearing_ = (u(rng_) - 0.5) * (s_.fov_rad - 30 * kPi<double> / 180);
+      }
+      std::poisson_distribution<int> more(s_.burst_per_scan);
+      for (int c = more(rng_); c > 0; --c) {
+        const double r = s_.min_range_m + (s_.max_range_m - s_.min_range_m) * u(rng_);
+        const double b = burst_bearing_ + (u(rng_) - 0.5) * 30 * kPi<double> / 180;
+        out.observations.push_back({Eigen::Vector2d(r, b), -1, R});
+      }
+    }
   }
   std::shuffle(out.observations.begin(), out.observations.end(), rng_);
   return true;

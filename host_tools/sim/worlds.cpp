@@ -31,6 +31,15 @@ const std::vector<WorldFamily> kFamilies{
     {"kidnap_reset",
      "60 landmarks in a 60 m square; at 30-60 s the robot is carried 5-20 m and turned 30-180 degrees, and the pose "
      "covariance is reset to 15 m / 180 degrees, two laps"},
+    {"kidnap_silent",
+     "60 landmarks in a 60 m square; at 30-60 s the robot is carried 5-20 m and turned 30-180 degrees, and the filter "
+     "is not told, two laps"},
+    {"clutter_burst",
+     "60 landmarks in a 60 m square; from 10-30 s on, for 3-8 s of every 20-40 s, 10-25 more clutter returns per scan "
+     "within a 30-degree sector, two laps"},
+    {"movers",
+     "60 landmarks in a 60 m square, 4-10 of them moving out and back at 0.05-0.3 m/s over a period of 20-80 s, two "
+     "laps"},
     {"small", "15-30 landmarks in a 40 m square, two laps"},
     {"large", "150-300 landmarks at one per 64 m^2 (a 100-140 m square), two laps"},
 };
@@ -89,6 +98,18 @@ double distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, c
   const Eigen::Vector2d ab = b - a;
   const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
   return (a + t * ab - p).norm();
+}
+
+// The kidnap families' world: 60 landmarks in a 60 m square, carried 5-20 m and turned 30-180
+// degrees at 30-60 s.
+void kidnap(Draw& d, Scenario& s) {
+  s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
+  s.waypoints = square(20);
+  s.waypoint_radius_m = 6;
+  const double dist = d.u(5, 20), dir = d.u(-180, 180) * kDeg;
+  s.kidnap_t_s = d.u(30, 60);
+  s.kidnap_move =
+      Eigen::Vector3d(dist * std::cos(dir), dist * std::sin(dir), d.u(30, 180) * kDeg * (d.u(0, 1) < 0.5 ? -1 : 1));
 }
 
 }  // namespace
@@ -151,15 +172,31 @@ Scenario draw_world(const std::string& family, std::uint64_t seed) {
     s.waypoints = square(20);
     s.clutter_per_scan = d.u(3, 10);
   } else if (family == "kidnap_reset") {
-    s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
-    s.waypoints = square(20);
-    s.waypoint_radius_m = 6;
-    const double dist = d.u(5, 20), dir = d.u(-180, 180) * kDeg;
-    s.kidnap_t_s = d.u(30, 60);
-    s.kidnap_move =
-        Eigen::Vector3d(dist * std::cos(dir), dist * std::sin(dir), d.u(30, 180) * kDeg * (d.u(0, 1) < 0.5 ? -1 : 1));
+    kidnap(d, s);
     s.kidnap_sigma_xy_m = 15;
     s.kidnap_sigma_theta_rad = 180 * kDeg;
+  } else if (family == "kidnap_silent") {
+    kidnap(d, s);
+    s.kidnap_told = false;
+  } else if (family == "clutter_burst") {
+    s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
+    s.waypoints = square(20);
+    s.burst_t_s = d.u(10, 30);
+    s.burst_duration_s = d.u(3, 8);
+    s.burst_every_s = d.u(20, 40);
+    s.burst_per_scan = d.u(10, 25);
+  } else if (family == "movers") {
+    s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
+    s.waypoints = square(20);
+    const int n = d.i(4, 10);
+    for (int k = 0; k < n; ++k) {
+      Scenario::Mover m;
+      m.index = k;  // the field's order is random: any n of them
+      const double speed = d.u(0.05, 0.3), dir = d.u(-180, 180) * kDeg;
+      m.v = Eigen::Vector2d(speed * std::cos(dir), speed * std::sin(dir));
+      m.period_s = d.u(20, 80);
+      s.movers.push_back(m);
+    }
   } else if (family == "small") {
     s.landmarks = field(d, d.i(15, 30), -20, 20, -20, 20, 4);
     s.waypoints = square(12);
@@ -208,7 +245,21 @@ void save_scenario(const Scenario& s, const std::string& path) {
                    {"dy_m", s.kidnap_move.y()},
                    {"dtheta_deg", s.kidnap_move.z() / kDeg},
                    {"sigma_xy_m", s.kidnap_sigma_xy_m},
-                   {"sigma_theta_deg", s.kidnap_sigma_theta_rad / kDeg}};
+                   {"sigma_theta_deg", s.kidnap_sigma_theta_rad / kDeg},
+                   {"told", s.kidnap_told}};
+  }
+  if (s.burst_per_scan > 0) {
+    j["clutter_burst"] = {{"t_s", s.burst_t_s},
+                          {"duration_s", s.burst_duration_s},
+                          {"every_s", s.burst_every_s},
+                          {"per_scan", s.burst_per_scan}};
+  }
+  if (!s.movers.empty()) {
+    nlohmann::json mv = nlohmann::json::array();
+    for (const Scenario::Mover& m : s.movers) {
+      mv.push_back({{"index", m.index}, {"vx_mps", m.v.x()}, {"vy_mps", m.v.y()}, {"period_s", m.period_s}});
+    }
+    j["movers"] = mv;
   }
   nlohmann::json lm = nlohmann::json::array(), wp = nlohmann::json::array();
   for (const Eigen::Vector2d& p : s.landmarks) lm.push_back({p.x(), p.y()});

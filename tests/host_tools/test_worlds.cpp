@@ -42,6 +42,17 @@ TEST_CASE("worlds: every family draws the same world from the same seed, and a f
       CHECK(r.kidnap_t_s == a.kidnap_t_s);
       CHECK(r.kidnap_move.x() == a.kidnap_move.x());
       CHECK(r.kidnap_move.z() == doctest::Approx(a.kidnap_move.z()).epsilon(1e-14));
+      CHECK(r.kidnap_told == a.kidnap_told);
+      CHECK(r.burst_t_s == a.burst_t_s);
+      CHECK(r.burst_duration_s == a.burst_duration_s);
+      CHECK(r.burst_every_s == a.burst_every_s);
+      CHECK(r.burst_per_scan == a.burst_per_scan);
+      REQUIRE(r.movers.size() == a.movers.size());
+      for (std::size_t k = 0; k < a.movers.size(); ++k) {
+        CHECK(r.movers[k].index == a.movers[k].index);
+        CHECK(r.movers[k].v == a.movers[k].v);
+        CHECK(r.movers[k].period_s == a.movers[k].period_s);
+      }
     }
   }
   CHECK_THROWS_AS(draw_world("no_such_family", 1), std::invalid_argument);
@@ -65,6 +76,29 @@ TEST_CASE("worlds: the families' stated ranges hold over 20 seeds") {
     const Scenario c = draw_world("clutter", seed);
     CHECK(c.clutter_per_scan >= 3);
     CHECK(c.clutter_per_scan <= 10);
+    const Scenario q = draw_world("kidnap_silent", seed);
+    CHECK(!q.kidnap_told);
+    CHECK(std::hypot(q.kidnap_move.x(), q.kidnap_move.y()) >= 5);
+    CHECK(k.kidnap_told);
+    const Scenario b = draw_world("clutter_burst", seed);
+    CHECK(b.burst_per_scan >= 10);
+    CHECK(b.burst_per_scan <= 25);
+    CHECK(b.burst_duration_s >= 3);
+    CHECK(b.burst_duration_s < b.burst_every_s);
+    const Scenario m = draw_world("movers", seed);
+    CHECK(m.movers.size() >= 4);
+    CHECK(m.movers.size() <= 10);
+    for (const Scenario::Mover& v : m.movers) {
+      CHECK(v.v.norm() >= 0.05 - 1e-12);
+      CHECK(v.v.norm() <= 0.3 + 1e-12);
+      // out and back: where it started after each period, at most half a period's travel away between
+      CHECK((landmark_at(m, static_cast<std::size_t>(v.index), v.period_s) -
+             m.landmarks[static_cast<std::size_t>(v.index)])
+                .norm() < 1e-9);
+      CHECK((landmark_at(m, static_cast<std::size_t>(v.index), 0.5 * v.period_s) -
+             m.landmarks[static_cast<std::size_t>(v.index)])
+                .norm() == doctest::Approx(0.5 * v.period_s * v.v.norm()));
+    }
     const Scenario l = draw_world("large", seed);
     CHECK(l.landmarks.size() >= 140);  // 150-300 drawn; a few may not fit the separation
     CHECK(l.landmarks.size() <= 300);
@@ -74,13 +108,15 @@ TEST_CASE("worlds: the families' stated ranges hold over 20 seeds") {
 TEST_CASE("worlds: the non-inferiority table counts worse and recovered worlds by the stated rule") {
   std::vector<WorldOutcome> w;
   //            family   file  err_base err_robust f1_base f1_robust anees_b anees_r truth
-  w.push_back({"a", "a1", 1.0, 1.4, 0.99, 0.99, 3, 3, -1});    // +0.4 m: within max(0.5, 20 %)
-  w.push_back({"a", "a2", 1.0, 1.6, 0.99, 0.99, 3, 3, -1});    // +0.6 m: worse
-  w.push_back({"a", "a3", 10.0, 11.9, 0.99, 0.99, 3, 3, -1});  // +1.9 m of 10: within 20 %
-  w.push_back({"b", "b1", 1.0, 1.0, 0.990, 0.984, 3, 3, -1});  // F1 -0.006: worse
-  w.push_back({"b", "b2", 8.0, 0.8, 0.90, 0.99, 50, 3, 0.6});  // diverged, recovered (TRUTH 0.6 m)
-  w.push_back({"b", "b3", 8.0, 1.5, 0.90, 0.99, 50, 3, 0.6});  // better, but not within TRUTH + 0.5
-  w.push_back({"b", "b4", 8.0, 0.9, 0.90, 0.99, 50, 3, -1});   // no TRUTH: under 1 m
+  w.push_back({"a", "a1", 1.0, 1.4, 0.99, 0.99, 3, 3, -1});          // +0.4 m: within max(0.5, 20 %)
+  w.push_back({"a", "a2", 1.0, 1.6, 0.99, 0.99, 3, 3, -1});          // +0.6 m: worse
+  w.push_back({"a", "a3", 10.0, 11.9, 0.99, 0.99, 3, 3, -1});        // +1.9 m of 10: within 20 %
+  w.push_back({"b", "b1", 1.0, 1.0, 0.990, 0.984, 3, 3, -1});        // F1 -0.006: worse
+  w.push_back({"b", "b2", 8.0, 0.8, 0.90, 0.99, 50, 3, 0.6});        // diverged, recovered (TRUTH 0.6 m)
+  w.push_back({"b", "b3", 8.0, 1.5, 0.90, 0.99, 50, 3, 0.6});        // better, but not within TRUTH + 0.5
+  w.push_back({"b", "b4", 8.0, 0.9, 0.90, 0.99, 50, 3, -1});         // no TRUTH: under 1 m
+  w.push_back({"b", "b5", 20.0, 18.0, 0.98, 0.98, 5e4, 5e4, 19.0});  // TRUTH diverged too: not recovered
+  w.push_back({"b", "b6", 20.0, 0.2, 0.98, 0.99, 5e4, 3, 19.0});     // TRUTH diverged: under 1 m is recovered
   CHECK(!robust_worse(w[0]));
   CHECK(robust_worse(w[1]));
   CHECK(!robust_worse(w[2]));
@@ -88,6 +124,8 @@ TEST_CASE("worlds: the non-inferiority table counts worse and recovered worlds b
   CHECK(robust_recovered(w[4]));
   CHECK(!robust_recovered(w[5]));
   CHECK(robust_recovered(w[6]));
+  CHECK(!robust_recovered(w[7]));
+  CHECK(robust_recovered(w[8]));
   const std::vector<FamilyRow> rows = non_inferiority(w);
   REQUIRE(rows.size() == 3);
   CHECK(rows[0].family == "a");
@@ -95,12 +133,12 @@ TEST_CASE("worlds: the non-inferiority table counts worse and recovered worlds b
   CHECK(rows[0].worse == 1);
   CHECK(rows[0].err_base == 1.0);  // median
   CHECK(rows[1].worse == 1);
-  CHECK(rows[1].recovered == 2);
+  CHECK(rows[1].recovered == 3);
   CHECK(rows[2].family == "total");
-  CHECK(rows[2].worlds == 7);
+  CHECK(rows[2].worlds == 9);
   CHECK(rows[2].worse == 2);
   const std::string md = non_inferiority_markdown(w);
-  CHECK(md.find("| total | 7 | 2 | 2 |") != std::string::npos);
+  CHECK(md.find("| total | 9 | 2 | 3 |") != std::string::npos);
   CHECK(md.find("- a2:") != std::string::npos);
   CHECK(md.find("- b1:") != std::string::npos);
 }

@@ -213,6 +213,8 @@ inline Stats sample<Stats>() {
   s.instr_relocalise = 250000;
   s.instr_loop = 120000;
   s.instr_window = 40000;
+  s.instr_lost_test = 4000;
+  s.instr_score = 30000;
   s.instr_step = 360000;
   s.stack_high_water_bytes = 2048;
   return s;

@@ -457,17 +457,17 @@ TEST_CASE("protocol: ranges and positive definiteness") {
 }
 
 TEST_CASE("protocol: SHUTDOWN and CONFIG's periodic STATS on the wire") {
-  // CONFIG's last field, after the 137 bytes of the step's options.
+  // CONFIG's last field, after the 140 bytes of the step's options.
   const std::vector<SchemaField> cf = schema_fields(MsgType::kConfig);
   REQUIRE(cf.back().name == "stats_period_scans");
   CHECK(cf.back().type == "u16");
-  CHECK(cf.back().offset == 137);
+  CHECK(cf.back().offset == 140);
   Config c = sample<Config>();
   c.stats_period_scans = 0x0102;
   const Bytes pl = payload_of(c);
-  REQUIRE(pl.size() == 139);
-  CHECK(pl[137] == 0x02);
-  CHECK(pl[138] == 0x01);
+  REQUIRE(pl.size() == 142);
+  CHECK(pl[140] == 0x02);
+  CHECK(pl[141] == 0x01);
   CHECK(Config{}.stats_period_scans == 0);  // off unless asked for
   Config out{};
   REQUIRE(out.decode(pl.data(), pl.size()) == Error::kOk);

@@ -93,7 +93,7 @@ class Options(TypedDict, total=False):
     reloc_base_pairs: int  # default 4
     reloc_inflation: float  # default 4
     reloc_confirm_scans: int  # default 1
-    reloc_lost_failed_scans: int  # default 0
+    reloc_lost_nats: float  # default 20
     loop_check: bool  # default 0
     loop_age: int  # default 100
     loop_min_inliers: int  # default 3

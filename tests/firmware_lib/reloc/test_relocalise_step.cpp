@@ -79,6 +79,7 @@ TEST_CASE_TEMPLATE("reloc step: a large but honest covariance keeps the robot tr
     CAPTURE(k);
     REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
     CHECK(!rig->out.reloc.aligned);
+    CHECK(rig->out.reloc.doubt == 0);  // every landmark in view paired: evidence for the pose
     CHECK(rig->step.localisation() == node::Localisation::kTracking);
     int paired = 0;
     for (int i = 0; i < rig->out.count; ++i) paired += rig->out.outcome[i] == node::Outcome::kPaired;
@@ -89,34 +90,83 @@ TEST_CASE_TEMPLATE("reloc step: a large but honest covariance keeps the robot tr
   CHECK(error < 0.2);
 }
 
-TEST_CASE_TEMPLATE("reloc step: a kidnap the covariance does not show is lost after failed scans, then found", T, float,
-                   double) {
+// The lost test (issue 36): scans the tracked pose does not explain (landmarks in view missed, none
+// paired) add up as evidence against it (a CUSUM); past reloc_lost_nats the scan is aligned
+// pose-free while still tracked, and a pose beyond the filter's prior is a kidnap.
+TEST_CASE_TEMPLATE("reloc step: a kidnap the covariance does not show is doubted by the lost test, then found", T,
+                   float, double) {
   const auto map = test::reloc_map();
   const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4};  // carried 14 m and 120 degrees
-  for (int failures : {0, 3}) {
-    CAPTURE(failures);
+  for (double h : {0.0, 20.0}) {
+    CAPTURE(h);
     StepSettings<T> s = test::reloc_settings<T>();
     s.relocalise = true;
-    s.reloc_lost_failed_scans = failures;
+    s.reloc_lost_nats = T(h);
     auto rig = test::make_known_map_rig<T, B>(map, s, before, Mat3<T>::Identity() * T(1e-4));
     observe_from(map, after, rig->obs);  // the filter is sure it is still at `before`
     REQUIRE(rig->obs.count >= 6);
-    for (int k = 1; k <= 3; ++k) {
+    int doubted_at = 0, relocalised_at = 0;
+    float doubt = 0;
+    for (int k = 1; k <= 6 && relocalised_at == 0; ++k) {
       REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
-      CHECK(!rig->out.reloc.aligned);
-      for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] != node::Outcome::kPaired);
-      const bool lost = failures > 0 && k == failures;
-      CHECK(rig->step.localisation() == (lost ? node::Localisation::kLost : node::Localisation::kTracking));
+      CHECK(rig->step.localisation() != node::Localisation::kLost);  // doubted, never lost: every scan is used
+      if (rig->out.reloc.doubted && doubted_at == 0) doubted_at = k;
+      if (rig->out.reloc.relocalised) relocalised_at = k;
+      if (relocalised_at == 0 && !rig->out.reloc.doubted) {
+        CHECK(rig->out.reloc.doubt >= doubt);  // the evidence against the pose adds up
+        doubt = rig->out.reloc.doubt;
+      }
     }
-    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
-    CHECK(rig->out.reloc.aligned == (failures > 0));
-    CHECK(rig->out.reloc.relocalised == (failures > 0));
-    if (failures > 0) {
+    if (h > 0) {
+      CHECK(doubted_at >= 2);  // one scan is not enough at 20 nats
+      CHECK(relocalised_at == doubted_at);
       CHECK(position_error(rig->step, after) < 0.05);
     } else {
-      CHECK(position_error(rig->step, after) > 10);  // off: the filter never notices
+      CHECK(doubted_at == 0);  // off: the filter never notices
+      CHECK(doubt == 0);
+      CHECK(position_error(rig->step, after) > 10);
     }
   }
+}
+
+TEST_CASE_TEMPLATE("reloc step: a doubted pose that the alignment finds within the prior is kept", T, float, double) {
+  const auto map = test::reloc_map();
+  const Pose2<double> at{-5, -5, 0.3};
+  StepSettings<T> s = test::reloc_settings<T>();
+  s.relocalise = true;
+  s.reloc_lost_nats = T(20);
+  auto rig = test::make_known_map_rig<T, B>(map, s, at, Mat3<T>::Identity() * T(1e-4));
+  // Empty scans: every landmark in view missed, evidence against the pose.
+  int k = 0;
+  for (; k < 10 && rig->out.reloc.doubt < 20; ++k) {
+    rig->obs.count = 0;
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(!rig->out.reloc.aligned);
+  }
+  REQUIRE(rig->out.reloc.doubt >= 20);
+  const Pose2<T> x = rig->step.slam().pose();
+  observe_from(map, at, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.doubted);
+  CHECK(rig->out.reloc.aligned);
+  CHECK(rig->out.reloc.cleared);  // the aligned pose lies within the prior: the pose stands
+  CHECK(!rig->out.reloc.relocalised);
+  CHECK(rig->out.reloc.doubt == 0);
+  CHECK(rig->step.localisation() == node::Localisation::kTracking);
+  // The scan was used as usual: paired as a step that never doubted pairs it.
+  StepSettings<T> off = s;
+  off.reloc_lost_nats = T(0);
+  auto twin = test::make_known_map_rig<T, B>(map, off, at, Mat3<T>::Identity() * T(1e-4));
+  observe_from(map, at, twin->obs);
+  REQUIRE(twin->step.step(twin->obs, twin->out) == Status::kOk);
+  int paired = 0;
+  for (int i = 0; i < rig->out.count; ++i) {
+    paired += rig->out.outcome[i] == node::Outcome::kPaired;
+    CHECK(rig->out.outcome[i] == twin->out.outcome[i]);
+    CHECK(rig->out.feature[i] == twin->out.feature[i]);
+  }
+  CHECK(paired >= 6);
+  CHECK(std::abs(double(rig->step.slam().pose().x - x.x)) < 0.05);
 }
 
 TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the robot back to lost", T, float, double) {

@@ -93,7 +93,7 @@
   X(BOOL, augment, 1, (ANY, 0, 0), "", "", \
     "add new landmarks (off: a known, fixed map; the host sets it with --known-map)") \
   X(BOOL, relocalise, 0, (ANY, 0, 0), "", "--relocalise", \
-    "when lost (told, or reloc_lost_failed_scans), align each scan against the map with the pose prior and resume at a unique, confirmed pose") \
+    "when lost (told, or reloc_lost_nats), align each scan against the map with the pose prior and resume at a unique, confirmed pose") \
   X(INT, reloc_min_inliers, 5, (CLOSED, 3, 255), "", "--reloc-min-inliers", \
     "landmarks an aligned pose must explain, and a confirming scan pair") \
   X(REAL, reloc_margin_nats, 10, (GE, 0, 0), "nats", "--reloc-margin", \
@@ -104,8 +104,8 @@
     "the aligned pose's covariance is the fit's times this (the scan is then used again in the update)") \
   X(INT, reloc_confirm_scans, 1, (CLOSED, 0, 16), "", "--reloc-confirm-scans", \
     "scans after the relocalisation that must pair reloc_min_inliers landmarks before the robot is found") \
-  X(INT, reloc_lost_failed_scans, 0, (CLOSED, 0, 255), "scans", "--reloc-lost-failed-scans", \
-    "the robot is lost after this many scans in a row that pair no landmark with reloc_min_inliers in view (0: off)") \
+  X(REAL, reloc_lost_nats, 20, (GE, 0, 0), "nats", "--reloc-lost-nats", \
+    "the pose is doubted (aligned pose-free) when the scans' evidence against it, summed (CUSUM), passes this (0: off)") \
   X(BOOL, loop_check, 0, (ANY, 0, 0), "", "--loop-check", \
     "score a closure with old landmarks against a pose-free alignment; commit only a unique, confirmed winner") \
   X(INT, loop_age, 100, (CLOSED, 1, 255), "scans", "--loop-age", \

@@ -110,6 +110,8 @@ class LandmarkBook {
     next_id_ = 0;
   }
   int size() const { return n_; }
+  /// The id the next landmark gets (ids grow and are never reused).
+  FeatureId next_id() const { return next_id_; }
   /// No room for another landmark: MaxLandmarks are mapped, or the ids are used up.
   bool full() const { return n_ >= MaxLandmarks || next_id_ == kMaxId; }
   const LandmarkRecord<T>& operator[](int j) const { return rec_[j]; }

@@ -151,14 +151,10 @@ void Slam<T, B>::count_evidence(const Prediction<T, B>& pred, const Association<
     if (j < 0) continue;  // not in this map
     bool paired = false;
     for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
-    const Vec2<T>& h = pred.h[a];
-    bool in_view = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
-    for (int b = 0; b < pred.count && in_view && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
-      in_view = !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
-    }
-    stats.expected += in_view;
+    const bool seen = ekf::in_view(pred, a, view);
+    stats.expected += seen;
     stats.paired += paired;
-    book_.count(j, in_view, paired, policy);
+    book_.count(j, seen, paired, policy);
     if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
   }
 }

@@ -94,6 +94,18 @@ struct Visibility {
   T half_fov_rad = T(0);
   T occlusion_rad = T(0);
 };
+/// Candidate a of the prediction is in view: within range and field of view, and no nearer candidate
+/// within occlusion_rad of its bearing. The review's and the lost test's one rule. Bound: n with
+/// occlusion, else O(1).
+template <typename T, class B>
+bool in_view(const Prediction<T, B>& pred, int a, const Visibility<T>& view) {
+  const Vec2<T>& h = pred.h[a];
+  bool seen = h.x() >= view.min_range_m && h.x() <= view.max_range_m && std::abs(h.y()) <= view.half_fov_rad;
+  for (int b = 0; b < pred.count && seen && view.occlusion_rad > T(0); ++b) {  // <= kMaxCandidates
+    seen = !(b != a && pred.h[b].x() < h.x() && std::abs(wrap_angle(pred.h[b].y() - h.y())) < view.occlusion_rad);
+  }
+  return seen;
+}
 /// Visibility's members, all options of the table (core/settings.hpp, bind_options).
 #define GEOJCBB_VISIBILITY_OPTIONS(F) \
   F(min_range_m, min_range_m) F(max_range_m, max_range_m) F(half_fov_rad, half_fov_rad) F(occlusion_rad, occlusion_rad)
@@ -245,10 +257,14 @@ class Slam {
   }
 
   int landmarks() const { return book_.size(); }
+  /// The id the next landmark gets: every landmark with a smaller id was mapped before.
+  FeatureId next_id() const { return book_.next_id(); }
   /// The stable id of landmark index j (0 <= j < landmarks()).
   FeatureId id(int j) const { return book_[j].id; }
   /// Hits so far of landmark index j (saturating at 65535).
   int hits(int j) const { return book_[j].hits; }
+  /// Reviews landmark j was in view or paired (its detection rate's denominator).
+  int expected(int j) const { return book_[j].expected; }
   /// Reviews since landmark index j was last paired (saturating at 255).
   int unseen(int j) const { return book_[j].unseen; }
   /// Reviews since landmark j was added (saturating at 255).

@@ -4,7 +4,7 @@
 //     relocaliser (lost: align, nothing else) -> predict_local(r + d) -> associate (strategy, or the
 //     caller's override) -> [tentative] -> loop check -> [clusters first] -> hypothesis window ->
 //     update (a stage's Closure: inflated pose, rounds) -> augment -> review -> [duplicate merge]
-//     -> relocaliser's confirmation
+//     -> the lost test (scan_evidence) and the relocaliser's confirmation
 // Each stage that keeps state across scans is a member of its own type (node/stages/), reads the
 // map through a MapView, edits the association only through pair/unpair, and returns what it
 // decided; the step applies it to the filter.
@@ -140,7 +140,11 @@ class SlamStep {
                             const AssociationOverride<T, B>* override = nullptr) {
     if (!configured_) return Status::kInvalidInput;
     const std::uint32_t t0 = clock ? clock() : 0;
+    scratch_.ws.clock = clock;  // the posterior scoring's count (set_log_likelihood)
+    scratch_.ws.score_count = 0;
     const MapView<T, B> map{slam_, policy_};
+    // The lost test's landmarks: mapped before this scan (and before a doubt began).
+    const FeatureId before = reloc_.evidence_before(map);
     RelocStats rs;
     Status st = localise(obs, map, rs);
     if (st != Status::kOk) return st;
@@ -149,6 +153,7 @@ class SlamStep {
       unused(obs, out);
       out.reloc = rs;
       out.counts.relocalise = t_reloc - t0;  // aligned (the robot is lost)
+      out.counts.score = scratch_.ws.score_count;
       out.counts.step = t_reloc - t0;
       return Status::kOk;
     }
@@ -189,14 +194,21 @@ class SlamStep {
     out.counts.relocalise = rs.aligned ? t_reloc - t0 : 0;
     out.counts.predict_local = t1 - t_reloc;
     out.counts.associate = t2 - t1;
-    out.counts.step += t_window - t0;
     int paired = 0;
     for (int i = 0; i < out.count; ++i) paired += out.outcome[i] == Outcome::kPaired;  // <= kMaxObservations
-    if (reloc_.confirm(cfg_, paired, out.count, pred_.count, assoc_.jointly_compatible, rs) &&
+    // The lost test's evidence at the tracked pose (the association's prediction), while tracking.
+    const std::uint32_t t_test = clock ? clock() : 0;
+    const bool testing = cfg_.relocalise && cfg_.reloc_lost_nats > T(0) && tracking && !override;
+    const T evidence = testing ? scan_evidence(obs, pred_, assoc_, map, before, view_, loop_align_.model) : T(0);
+    const std::uint32_t t_tested = clock ? clock() : 0;
+    out.counts.lost_test = testing ? t_tested - t_test : 0;
+    if (reloc_.confirm(cfg_, paired, evidence, before, assoc_.jointly_compatible, rs) &&
         slam_.relocalise(slam_.pose(), reloc_.lost_covariance()) == Status::kOk) {  // validated when it was set
       reloc_.rejected(rs);
     }
     out.reloc = rs;
+    out.counts.score = scratch_.ws.score_count;
+    out.counts.step = (clock ? clock() : 0) - t0;
     return Status::kOk;
   }
 
@@ -363,7 +375,9 @@ class SlamStep {
     out.diag = assoc_.diag;
     out.review = rs;
     out.review.evicted = evicted;
-    out.counts = StageCounts{0, 0, t3 - t2, t4 - t3, t4 - t2};
+    out.counts = StageCounts{};
+    out.counts.update = t3 - t2;
+    out.counts.augment_review = t4 - t3;
     return Status::kOk;
   }
 

@@ -88,6 +88,10 @@ struct AlignWorkspace {
   std::array<bool, B::kMaxObservations> skip{};
   /// Where the sensor sits on the robot (the filter's; kept by clear_map()).
   Mount<T> mount{};
+  /// A free-running counter (nullptr: none) and what set_log_likelihood spent by it since the caller
+  /// zeroed score_count (the posterior scoring's row of the step's counts; kept by clear_map()).
+  std::uint32_t (*clock)() = nullptr;
+  mutable std::uint32_t score_count = 0;
   void clear_map() {
     n = 0;
     skip.fill(false);
@@ -290,15 +294,10 @@ template <typename T, class B>
 
 }  // namespace align_detail
 
-/// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
-/// at pose x, over the map in ws and the observations align() prepared (ws.q, ws.S):
-///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
-///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
-/// Bound: m + n.
+namespace align_detail {
 template <typename T, class B>
-[[gnu::noinline]] T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x,
-                                       const AlignOptions<T>& view, const SetModel<T>& model) {
-  using namespace align_detail;
+T set_log_likelihood_at(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& view,
+                        const SetModel<T>& model) {
   const Mat2<T> Rot = rotation(x.theta);
   const T log_2pi = std::log(T(2) * kPi<T>);
   T ll = T(0);
@@ -318,6 +317,21 @@ template <typename T, class B>
   }
   const int missed = view.max_range_m > T(0) ? misses(ws, m, x, view) : 0;
   return ll + T(missed) * std::log(T(1) - model.p_detect);
+}
+}  // namespace align_detail
+/// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
+/// at pose x, over the map in ws and the observations align() prepared (ws.q, ws.S):
+///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
+///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
+/// Bound: m + n.
+/// Counted in ws.score_count when ws.clock is set.
+template <typename T, class B>
+[[gnu::noinline]] T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x,
+                                       const AlignOptions<T>& view, const SetModel<T>& model) {
+  const std::uint32_t t0 = ws.clock ? ws.clock() : 0;
+  const T ll = align_detail::set_log_likelihood_at(ws, m, x, view, model);
+  if (ws.clock) ws.score_count += ws.clock() - t0;
+  return ll;
 }
 
 /// Exclusive inliers of pose x: each observation its nearest landmark in the gate; a landmark

@@ -59,7 +59,24 @@ struct Scenario {
   Eigen::Vector3d kidnap_move = Eigen::Vector3d::Zero();
   double kidnap_sigma_xy_m = 5.0;
   double kidnap_sigma_theta_rad = 0.5;
+  /// false (JSON kidnap "told": false): a silent kidnap, the filter is not told (no reset covariance).
+  bool kidnap_told = true;
+  /// Bursts of clutter (JSON "clutter_burst": {"t_s", "duration_s", "every_s", "per_scan"}): from
+  /// burst_t_s on, for burst_duration_s out of every burst_every_s (0: once), burst_per_scan more
+  /// clutter returns per scan (a Poisson mean), all within a 30-degree sector of a bearing drawn per burst.
+  double burst_t_s = 0, burst_duration_s = 0, burst_every_s = 0, burst_per_scan = 0;
+  /// Landmarks that move (JSON "movers": [{"index", "vx_mps", "vy_mps", "period_s"}]): landmark
+  /// `index` goes out along v for half the period and back for the other half, from t = 0.
+  struct Mover {
+    int index = 0;
+    Eigen::Vector2d v = Eigen::Vector2d::Zero();
+    double period_s = 1;
+  };
+  std::vector<Mover> movers;
 };
+
+/// Where landmark j of s is at time t (movers move; the rest stand).
+Eigen::Vector2d landmark_at(const Scenario& s, std::size_t j, double t_s);
 
 /// Reads a scenario file. Throws std::runtime_error with the file and field on a bad file.
 Scenario load_scenario(const std::string& path);
@@ -94,6 +111,8 @@ class Simulator {
   int lap_ = 0;
   long k_ = 0;
   bool kidnap_done_ = false;
+  long burst_ = -1;           ///< the burst under way (its index from burst_t_s), -1: none yet
+  double burst_bearing_ = 0;  ///< its sector's centre [rad]
 };
 
 }  // namespace geojcbb::host

@@ -212,7 +212,7 @@ struct Config : Codec<Config> {
   std::uint8_t reloc_base_pairs = 4;         ///< 1 .. 8
   float reloc_inflation = 4.0f;              ///< >= 1
   std::uint8_t reloc_confirm_scans = 1;      ///< 0 .. 16
-  std::uint8_t reloc_lost_failed_scans = 0;  ///< 0: off
+  float reloc_lost_nats = 20.0f;             ///< >= 0 (0: off)
   bool loop_check = false;                   ///< loop closures scored against a pose-free alignment
   std::uint8_t loop_age = 100;               ///< scans unpaired that make a landmark old, >= 1
   std::uint8_t loop_min_inliers = 3;         ///< >= 3
@@ -287,8 +287,8 @@ struct Config : Codec<Config> {
         field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
         field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
         field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
-        field("reloc_lost_failed_scans", &Config::reloc_lost_failed_scans, range::any(), "scans",
-              "lost after this many scans in a row that pair nothing (0: off)"),
+        field("reloc_lost_nats", &Config::reloc_lost_nats, range::not_below(0.0f), "nats",
+              "the pose doubted past this evidence against it (0: off)"),
         field("loop_check", &Config::loop_check, range::one_of(0, 1), "", "loop closures checked before commit"),
         field("loop_age", &Config::loop_age, range::at_least(1), "scans", "unpaired this long: an old landmark"),
         field("loop_min_inliers", &Config::loop_min_inliers, range::at_least(3)),
@@ -746,9 +746,9 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 139 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 142 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 84 &&
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 92 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
                   AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");

@@ -17,6 +17,8 @@
   X(relocalise, "the relocaliser's alignment: 0 unless the robot was lost") \
   X(loop, "the loop-closure check: 0 when it did not run") \
   X(window, "clusters first and the hypothesis window: 0 when they did not run") \
+  X(lost_test, "the lost test's evidence at the tracked pose: 0 unless the relocaliser is on and tracking") \
+  X(score, "the posterior scoring (set likelihood) of the alignment, loop check and window, inside their rows") \
   X(step, "the whole step")
 /* clang-format on */
 

@@ -25,6 +25,7 @@ class MapView {
 
   int size() const { return slam_->landmarks(); }
   FeatureId id(int k) const { return slam_->id(k); }
+  FeatureId next_id() const { return slam_->next_id(); }
   /// The slot of feature `id`, or -1 (never mapped, removed, or not a feature: kNewFeature, kUnmatched).
   int slot_of(FeatureId id) const { return slam_->index_of(id); }
   Vec2<T> mean(int k) const { return slam_->landmark(k); }
@@ -41,6 +42,7 @@ class MapView {
     return slam_->cov(r, r) + slam_->cov(r + 1, r + 1);
   }
   int hits(int k) const { return slam_->hits(k); }
+  int expected(int k) const { return slam_->expected(k); }
   int unseen(int k) const { return slam_->unseen(k); }
   int age(int k) const { return slam_->age(k); }
   /// Paired confirm_hits times at least: the map the window, the clusters and the alignments use.

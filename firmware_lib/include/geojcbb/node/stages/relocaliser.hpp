@@ -1,19 +1,24 @@
 // node/stages: the relocaliser (StepSettings::relocalise). Its state across scans: tracking, lost or
-// confirming, the scans left to confirm, the failed scans in a row, the pose covariance when lost.
-//   localise()  before the association: lost (told: SlamStep::lost, RELOCALISE; or failed scans:
-//               evidence, never the covariance alone) -> the scan aligned against the supported
-//               landmarks (reloc::align) with the filter's pose as the prior, unless its position
-//               spread is wider than the map (then pose-free); an accepted alignment is returned as
-//               a Relocation for the step to apply
-//   confirm()   after the update: while confirming, reloc_confirm_scans jointly compatible scans with
-//               reloc_min_inliers pairs make the robot found, one without sends it back (Verdict)
-// Bounds: one align() call and one fit per lost scan; O(m) per tracked scan.
+// confirming, the scans left to confirm, the doubt (the lost test's CUSUM), the pose covariance when lost.
+//   localise()  before the association: lost (told: SlamStep::lost, RELOCALISE) -> the scan aligned
+//               against the supported landmarks (reloc::align) with the filter's pose as the prior,
+//               unless its position spread is wider than the map (then pose-free); doubted (the lost
+//               test below) -> the scan aligned pose-free while it is still tracked: an accepted pose
+//               within the filter's prior clears the doubt, one beyond it is a kidnap. An accepted
+//               alignment is returned as a Relocation for the step to apply
+//   confirm()   after the update: the lost test (scan_evidence, a CUSUM against reloc_lost_nats:
+//               evidence, never the covariance alone); while confirming, reloc_confirm_scans jointly
+//               compatible scans with reloc_min_inliers pairs make the robot found, one without sends
+//               it back
+// Bounds: one align() call and one fit per lost or doubted scan; scan_evidence O(m n) per tracked scan.
 // docs/relocalisation.md.
 #pragma once
 
 #include <limits>
 
 #include "geojcbb/core/association_config.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
 #include "geojcbb/reloc/align.hpp"
 
@@ -36,6 +41,9 @@ struct RelocStats {
   bool prior = false;                            ///< the alignment had the filter's pose as its prior (else pose-free)
   bool ambiguous = false;                        ///< a distinct pose within reloc_margin_nats: nothing accepted
   bool unmapped = false;                         ///< "not of the map" within reloc_margin_nats: nothing accepted
+  bool doubted = false;  ///< aligned pose-free while tracking: the lost test doubted the tracked pose
+  bool cleared = false;  ///< of a doubted scan: the aligned pose lies within the filter's prior (doubt cleared)
+  float doubt = 0;       ///< the lost test's CUSUM after the step [nats]; doubted from reloc_lost_nats on
   int inliers = 0, rival_inliers = 0, misses = 0, hypotheses = 0;  ///< of the alignment
 };
 
@@ -49,12 +57,48 @@ struct Relocation {
   int pairs = 0;
 };
 
+/// The lost test's evidence of one tracked scan [nats]: log p(scan | the tracked pose is right) -
+/// log p(scan | it is wrong), from the step's association at the tracked pose (its prediction):
+///   sum over pairs with supported landmarks  log p_j - d2/2 - log|2 pi S|/2 - log(density r_i)
+///   + (supported landmarks in view, not paired)  log(1 - p_j)
+/// p_j = min(p_D, (hits + 1) / (expected + 2)): the landmark's own detection rate (a landmark often
+/// missed where it should be seen, occluded or spurious, is little evidence either way).
+/// S = C_jj + R_i (range, bearing); density r_i: the unexplained density per m^2 in (range, bearing)
+/// at the observation's range. Pose wrong: every observation is unexplained (observations the map
+/// does not explain cancel) and the landmarks the map puts in view are not there. Only supported
+/// landmarks with an id below `before` are evidence: tentative ones, and those mapped since the pose
+/// came into doubt, were made at the tracked pose and follow it. Bound: m n (+ n^2 occlusion).
+template <typename T, class B>
+[[gnu::noinline]] T scan_evidence(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                  const Association<T, B>& assoc, const MapView<T, B>& map, FeatureId before,
+                                  const ekf::Visibility<T>& view, const reloc::SetModel<T>& model) {
+  const T log_2pi = std::log(T(2) * kPi<T>), log_density = std::log(model.unexplained_density);
+  T e = T(0);
+  for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+    const int k = map.slot_of(pred.id[a]);
+    if (pred.id[a] >= before || !map.supported(k)) continue;
+    const T p = std::min(model.p_detect, (T(map.hits(k)) + T(1)) / (T(map.expected(k)) + T(2)));
+    int i = 0;
+    while (i < assoc.count && assoc.feature[i] != pred.id[a]) ++i;  // <= kMaxObservations
+    if (i == assoc.count) {
+      e += ekf::in_view(pred, a, view) ? std::log(T(1) - p) : T(0);
+      continue;
+    }
+    const Mat2<T> S = pred.C.block(a, a) + obs.R[i];
+    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (!(det > T(0)) || !(obs.z[i].x() > T(0))) continue;  // no evidence either way
+    const T d2 = mahalanobis2(innovation(obs.z[i], pred.h[a]), S);
+    e += std::log(p) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det) - log_density - std::log(obs.z[i].x());
+  }
+  return e;
+}
+
 template <typename T, class B>
 class Relocaliser {
  public:
   void reset() {
     state_ = Localisation::kTracking;
-    failed_scans_ = 0;
+    doubt_ = T(0);
     trust_prior_ = true;
   }
   /// The user says so (RELOCALISE, SlamStep::lost): the pose covariance the user set is the prior.
@@ -62,9 +106,15 @@ class Relocaliser {
   void lost(bool relocalising) {
     if (!relocalising) return;
     state_ = Localisation::kLost;
+    doubt_ = T(0);
     trust_prior_ = true;
   }
   Localisation state() const { return state_; }
+  /// The lost test's doubt (CUSUM, nats).
+  T doubt() const { return doubt_; }
+  /// The landmarks that are evidence on the pose (scan_evidence's `before`): those mapped before the
+  /// pose came into doubt (all of them while there is none).
+  FeatureId evidence_before(const MapView<T, B>& map) const { return doubt_ > T(0) ? doubt_from_ : map.next_id(); }
 
   /// Before the association. When lost, the scan is aligned against the supported landmarks
   /// (scratch.result); an accepted pose is then fit() for the step to apply, which calls relocalised().
@@ -76,22 +126,27 @@ class Relocaliser {
                                 RelocStats& rs) {
     rs = RelocStats{};
     rs.state = state_;
-    if (!cfg.relocalise || state_ != Localisation::kLost) return Status::kOk;
+    rs.doubt = static_cast<float>(doubt_);
+    const bool doubted = cfg.relocalise && state_ == Localisation::kTracking && cfg.reloc_lost_nats > T(0) &&
+                         doubt_ >= cfg.reloc_lost_nats;
+    if (!cfg.relocalise || (state_ != Localisation::kLost && !doubted)) return Status::kOk;
     scratch.clear();
     Vec2<T> lo(std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity()), hi = -lo;
     for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
-      if (!map.supported(k)) continue;
+      // Doubted: the landmarks mapped since the doubt began follow the doubted pose, and are left out.
+      if (!map.supported(k) || (doubted && map.id(k) >= doubt_from_)) continue;
       const Status st = scratch.push(map, k);
       if (st != Status::kOk) return st;
       lo = lo.cwiseMin(map.mean(k));
       hi = hi.cwiseMax(map.mean(k));
     }
-    // The prior says where to look, unless the scans declared the pose wrong (lost by failed scans:
-    // the covariance did not show it) or it is wider than the map (a reset that carries no
-    // information: its position sigma against the map's half diagonal).
+    // The prior says where to look, unless the scans doubt the pose (the covariance did not show
+    // it) or it is wider than the map (a reset that carries no information: its position sigma
+    // against the map's half diagonal).
     const T spread2 = map.pose_cov(0, 0) + map.pose_cov(1, 1);
     const T half_diag2 = scratch.ws.n > 0 ? T(0.25) * (hi - lo).squaredNorm() : T(0);
-    if (!trust_prior_ || !(spread2 < half_diag2) || !reloc::set_prior(map.pose(), map.pose_covariance(), align)) {
+    if (doubted || !trust_prior_ || !(spread2 < half_diag2) ||
+        !reloc::set_prior(map.pose(), map.pose_covariance(), align)) {
       align.has_prior = false;
     }
     rs.prior = align.has_prior;
@@ -110,6 +165,19 @@ class Relocaliser {
     rs.hypotheses = a.hypotheses;
     rs.ambiguous = a.ambiguous;
     rs.unmapped = a.unmapped;
+    rs.doubted = doubted;
+    if (doubted && scratch.result.accepted) {
+      // The tracked pose explains the alignment when it lies within the filter's prior (the gate
+      // the prior's candidates are scored in): the doubt cleared, nothing applied.
+      reloc::AlignOptions<T> tracked = align;
+      if (reloc::set_prior(map.pose(), map.pose_covariance(), tracked) &&
+          reloc::prior_d2(tracked, a.pose) <= tracked.prior_gate_d2) {
+        scratch.result.accepted = false;
+        rs.cleared = true;
+        doubt_ = T(0);
+        rs.doubt = 0;
+      }
+    }
     return Status::kOk;
   }
   /// After localise() with scratch.result.accepted: the accepted pose for the step to apply, with the
@@ -132,6 +200,8 @@ class Relocaliser {
   void relocalised(const AssociationConfig<T, B>& cfg, const Mat3<T>& lost_cov, RelocStats& rs) {
     lost_cov_ = lost_cov;
     rs.relocalised = true;
+    if (rs.doubted) trust_prior_ = false;  // a failed confirmation: lost, pose-free (the prior was doubted)
+    doubt_ = T(0);
     state_ = cfg.reloc_confirm_scans > 0 ? Localisation::kConfirming : Localisation::kTracking;
     rs.found = state_ == Localisation::kTracking;
     rs.state = state_;
@@ -139,21 +209,22 @@ class Relocaliser {
     skip_confirm_ = true;  // the scan that was aligned does not confirm itself
   }
 
-  /// After the update, with the scan's pairs, its observations and candidates. While tracking,
-  /// with reloc_lost_failed_scans > 0: a scan that pairs nothing although it has reloc_min_inliers
-  /// observations and as many candidates fails; that many in a row make the robot lost (a kidnap
-  /// the covariance does not show). @return true when the confirmation failed: the step puts the
-  /// pose covariance back to lost_covariance() and, if the filter takes it, calls rejected().
-  [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, int observations, int candidates,
+  /// After the update, with the scan's pairs and its evidence (scan_evidence). The lost test, while
+  /// tracking with reloc_lost_nats > 0: doubt = min(2 h, max(0, doubt - evidence)), a CUSUM (Page's
+  /// test) of the evidence against the tracked pose; from h = reloc_lost_nats on, the next scans are
+  /// aligned pose-free (localise). The cap bounds the scans it takes to trust the pose again.
+  /// @return true when the confirmation failed: the step puts the pose covariance back to
+  /// lost_covariance() and, if the filter takes it, calls rejected().
+  /// `before`: evidence_before() of the scan's evidence (where a new doubt begins).
+  [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, T evidence, FeatureId before,
                              bool jointly_compatible, RelocStats& rs) {
     const int need = cfg.reloc_min_inliers;
-    const bool failed = paired == 0 && observations >= need && candidates >= need;
-    failed_scans_ = state_ == Localisation::kTracking && failed ? failed_scans_ + 1 : 0;
-    if (cfg.relocalise && cfg.reloc_lost_failed_scans > 0 && failed_scans_ >= cfg.reloc_lost_failed_scans) {
-      state_ = Localisation::kLost;
-      failed_scans_ = 0;
-      trust_prior_ = false;  // the scans say the pose is wrong, whatever its covariance says
+    const T h = cfg.reloc_lost_nats;
+    if (cfg.relocalise && state_ == Localisation::kTracking && h > T(0) && std::isfinite(evidence)) {
+      if (!(doubt_ > T(0))) doubt_from_ = before;
+      doubt_ = std::min(T(2) * h, std::max(T(0), doubt_ - evidence));
     }
+    rs.doubt = static_cast<float>(doubt_);
     bool reject = false;
     if (state_ == Localisation::kConfirming && !skip_confirm_) {
       if (paired >= need && jointly_compatible) {
@@ -179,9 +250,10 @@ class Relocaliser {
  private:
   Localisation state_ = Localisation::kTracking;
   int confirm_left_ = 0;
-  int failed_scans_ = 0;  ///< scans in a row that paired nothing while tracking (reloc_lost_failed_scans)
+  T doubt_ = T(0);            ///< the lost test's CUSUM [nats] (confirm)
+  FeatureId doubt_from_ = 0;  ///< while doubt_ > 0: the first id mapped since the doubt began
   bool skip_confirm_ = false;
-  bool trust_prior_ = true;  ///< lost by being told (the pose covariance is the prior), not by failed scans
+  bool trust_prior_ = true;  ///< lost by being told (the pose covariance is the prior), not after a doubt
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
 };
 
