@@ -32,6 +32,8 @@ struct Budget {
   std::vector<std::uint32_t> relocalise;   ///< the relocaliser's alignment, of the scans that ran it
   std::vector<std::uint32_t> loop;         ///< the loop-closure check, of the scans that ran it
   std::vector<std::uint32_t> window;       ///< clusters first and the hypothesis window, of the scans that ran them
+  std::vector<std::uint32_t> lost_test;    ///< the lost test, per scan (0: not run)
+  std::vector<std::uint32_t> score;        ///< the posterior scoring (inside the rows above), per scan
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
 };
@@ -72,6 +74,8 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       if (st.instr_relocalise > 0) b.relocalise.push_back(st.instr_relocalise);
       if (st.instr_loop > 0) b.loop.push_back(st.instr_loop);
       if (st.instr_window > 0) b.window.push_back(st.instr_window);
+      b.lost_test.push_back(st.instr_lost_test);
+      b.score.push_back(st.instr_score);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -214,7 +218,7 @@ int run(int argc, char** argv) {
     if (!budget_csv.empty()) {
       csv.open(budget_csv);
       csv << "scenario,strategy,scan,observations,instr_associate,instr_step,instr_predict_local,instr_update,"
-             "instr_augment_review\n";
+             "instr_augment_review,instr_lost_test,instr_score\n";
     }
     for (const Method& m : strategies) {
       RunOptions ro = o;
@@ -238,7 +242,7 @@ int run(int argc, char** argv) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
           csv << '"' << sc.name << "\"," << m.name() << ',' << i << ',' << b.observations[i] << ',' << b.associate[i]
               << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ',' << b.augment_review[i]
-              << '\n';
+              << ',' << b.lost_test[i] << ',' << b.score[i] << '\n';
         }
       }
       budgets.push_back(std::move(b));
@@ -255,18 +259,19 @@ int run(int argc, char** argv) {
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];
-        if (!b.relocalise.empty()) {
-          std::printf("  %-8s %zu lost scans aligned against the map: median %u, max %u instructions\n",
-                      strategies[k].name().c_str(), b.relocalise.size(), median(b.relocalise), maximum(b.relocalise));
-        }
-        if (!b.loop.empty()) {
-          std::printf("  %-8s %zu scans had their loop closure checked: median %u, max %u instructions\n",
-                      strategies[k].name().c_str(), b.loop.size(), median(b.loop), maximum(b.loop));
-        }
-        if (!b.window.empty()) {
-          std::printf("  %-8s %zu scans ran clusters first or the hypothesis window: median %u, max %u instructions\n",
-                      strategies[k].name().c_str(), b.window.size(), median(b.window), maximum(b.window));
-        }
+        auto line = [&](const std::vector<std::uint32_t>& v, const char* what) {
+          std::vector<std::uint32_t> ran;
+          for (const std::uint32_t c : v)
+            if (c > 0) ran.push_back(c);
+          if (ran.empty()) return;
+          std::printf("  %-8s %zu scans %s: median %u, max %u instructions\n", strategies[k].name().c_str(), ran.size(),
+                      what, median(ran), maximum(ran));
+        };
+        line(b.relocalise, "(lost or doubted) aligned against the map");
+        line(b.loop, "had their loop closure checked");
+        line(b.window, "ran clusters first or the hypothesis window");
+        line(b.lost_test, "ran the lost test (tracking)");
+        line(b.score, "scored candidate poses by their set likelihood (inside the rows above)");
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];

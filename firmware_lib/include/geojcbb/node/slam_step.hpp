@@ -140,8 +140,7 @@ class SlamStep {
                             const AssociationOverride<T, B>* override = nullptr) {
     if (!configured_) return Status::kInvalidInput;
     const std::uint32_t t0 = clock ? clock() : 0;
-    scratch_.ws.clock = clock;  // the posterior scoring's count (set_log_likelihood)
-    scratch_.ws.score_count = 0;
+    scratch_.ws.score = {clock, 0};  // the posterior scoring's count (set_log_likelihood)
     const MapView<T, B> map{slam_, policy_};
     // The lost test's landmarks: mapped before this scan (and before a doubt began).
     const FeatureId before = reloc_.evidence_before(map);
@@ -153,7 +152,7 @@ class SlamStep {
       unused(obs, out);
       out.reloc = rs;
       out.counts.relocalise = t_reloc - t0;  // aligned (the robot is lost)
-      out.counts.score = scratch_.ws.score_count;
+      out.counts.score = scratch_.ws.score.count;
       out.counts.step = t_reloc - t0;
       return Status::kOk;
     }
@@ -207,7 +206,7 @@ class SlamStep {
       reloc_.rejected(rs);
     }
     out.reloc = rs;
-    out.counts.score = scratch_.ws.score_count;
+    out.counts.score = scratch_.ws.score.count;
     out.counts.step = (clock ? clock() : 0) - t0;
     return Status::kOk;
   }

@@ -89,9 +89,13 @@ struct AlignWorkspace {
   /// Where the sensor sits on the robot (the filter's; kept by clear_map()).
   Mount<T> mount{};
   /// A free-running counter (nullptr: none) and what set_log_likelihood spent by it since the caller
-  /// zeroed score_count (the posterior scoring's row of the step's counts; kept by clear_map()).
-  std::uint32_t (*clock)() = nullptr;
-  mutable std::uint32_t score_count = 0;
+  /// zeroed count (the posterior scoring's row of the step's counts; kept by clear_map()). 16 bytes
+  /// on 32- and 64-bit targets alike: the C API's storage sizes are one number for both.
+  struct alignas(16) ScoreClock {
+    std::uint32_t (*fn)() = nullptr;
+    std::uint32_t count = 0;
+  };
+  mutable ScoreClock score;
   void clear_map() {
     n = 0;
     skip.fill(false);
@@ -324,13 +328,13 @@ T set_log_likelihood_at(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x
 ///   sum over pairs (log p_D - d2 / 2 - log|2 pi S| / 2)  S = R Sigma R^T + P_j, world frame
 ///   + (landmarks in view at x, not paired) log(1 - p_D) + (unpaired observations) log(density)
 /// Bound: m + n.
-/// Counted in ws.score_count when ws.clock is set.
+/// Counted in ws.score.count when ws.score.fn is set.
 template <typename T, class B>
 [[gnu::noinline]] T set_log_likelihood(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x,
                                        const AlignOptions<T>& view, const SetModel<T>& model) {
-  const std::uint32_t t0 = ws.clock ? ws.clock() : 0;
+  const std::uint32_t t0 = ws.score.fn ? ws.score.fn() : 0;
   const T ll = align_detail::set_log_likelihood_at(ws, m, x, view, model);
-  if (ws.clock) ws.score_count += ws.clock() - t0;
+  if (ws.score.fn) ws.score.count += ws.score.fn() - t0;
   return ll;
 }
 
