@@ -90,7 +90,7 @@ TEST_CASE_TEMPLATE("reloc step: a large but honest covariance keeps the robot tr
   CHECK(error < 0.2);
 }
 
-// The lost test (issue 36): scans the tracked pose does not explain (landmarks in view missed, none
+// The lost test (docs/design.md, "Decisions with the prior"): scans the tracked pose does not explain (landmarks in view missed, none
 // paired) add up as evidence against it (a CUSUM); past reloc_lost_nats the scan is aligned
 // pose-free while still tracked, and a pose beyond the filter's prior is a kidnap.
 TEST_CASE_TEMPLATE("reloc step: a kidnap the covariance does not show is doubted by the lost test, then found", T,

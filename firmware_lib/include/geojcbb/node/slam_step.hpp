@@ -142,8 +142,6 @@ class SlamStep {
     const std::uint32_t t0 = clock ? clock() : 0;
     scratch_.ws.score = {clock, 0};  // the posterior scoring's count (set_log_likelihood)
     const MapView<T, B> map{slam_, policy_};
-    // The lost test's landmarks: mapped before this scan (and before a doubt began).
-    const FeatureId before = reloc_.evidence_before(map);
     RelocStats rs;
     Status st = localise(obs, map, rs);
     if (st != Status::kOk) return st;
@@ -198,10 +196,11 @@ class SlamStep {
     // The lost test's evidence at the tracked pose (the association's prediction), while tracking.
     const std::uint32_t t_test = clock ? clock() : 0;
     const bool testing = cfg_.relocalise && cfg_.reloc_lost_nats > T(0) && tracking && !override;
-    const T evidence = testing ? scan_evidence(obs, pred_, assoc_, map, before, view_, loop_align_.model) : T(0);
+    const T evidence =
+        testing ? scan_evidence(obs, pred_, assoc_, map, reloc_.evidence_before(), view_, loop_align_.model) : T(0);
     const std::uint32_t t_tested = clock ? clock() : 0;
     out.counts.lost_test = testing ? t_tested - t_test : 0;
-    if (reloc_.confirm(cfg_, paired, evidence, before, assoc_.jointly_compatible, rs) &&
+    if (reloc_.confirm(cfg_, paired, evidence, assoc_.jointly_compatible, rs) &&
         slam_.relocalise(slam_.pose(), reloc_.lost_covariance()) == Status::kOk) {  // validated when it was set
       reloc_.rejected(rs);
     }

@@ -112,9 +112,9 @@ class Relocaliser {
   Localisation state() const { return state_; }
   /// The lost test's doubt (CUSUM, nats).
   T doubt() const { return doubt_; }
-  /// The landmarks that are evidence on the pose (scan_evidence's `before`): those mapped before the
-  /// pose came into doubt (all of them while there is none).
-  FeatureId evidence_before(const MapView<T, B>& map) const { return doubt_ > T(0) ? doubt_from_ : map.next_id(); }
+  /// The landmarks that are evidence on the pose (scan_evidence's `before`): those mapped before this
+  /// scan, or before the pose came into doubt (localise() keeps it).
+  FeatureId evidence_before() const { return doubt_from_; }
 
   /// Before the association. When lost, the scan is aligned against the supported landmarks
   /// (scratch.result); an accepted pose is then fit() for the step to apply, which calls relocalised().
@@ -127,6 +127,7 @@ class Relocaliser {
     rs = RelocStats{};
     rs.state = state_;
     rs.doubt = static_cast<float>(doubt_);
+    if (!(doubt_ > T(0))) doubt_from_ = map.next_id();  // frozen while the doubt lasts
     const bool doubted = cfg.relocalise && state_ == Localisation::kTracking && cfg.reloc_lost_nats > T(0) &&
                          doubt_ >= cfg.reloc_lost_nats;
     if (!cfg.relocalise || (state_ != Localisation::kLost && !doubted)) return Status::kOk;
@@ -215,13 +216,11 @@ class Relocaliser {
   /// aligned pose-free (localise). The cap bounds the scans it takes to trust the pose again.
   /// @return true when the confirmation failed: the step puts the pose covariance back to
   /// lost_covariance() and, if the filter takes it, calls rejected().
-  /// `before`: evidence_before() of the scan's evidence (where a new doubt begins).
-  [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, T evidence, FeatureId before,
-                             bool jointly_compatible, RelocStats& rs) {
+  [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, T evidence, bool jointly_compatible,
+                             RelocStats& rs) {
     const int need = cfg.reloc_min_inliers;
     const T h = cfg.reloc_lost_nats;
     if (cfg.relocalise && state_ == Localisation::kTracking && h > T(0) && std::isfinite(evidence)) {
-      if (!(doubt_ > T(0))) doubt_from_ = before;
       doubt_ = std::min(T(2) * h, std::max(T(0), doubt_ - evidence));
     }
     rs.doubt = static_cast<float>(doubt_);
@@ -251,7 +250,7 @@ class Relocaliser {
   Localisation state_ = Localisation::kTracking;
   int confirm_left_ = 0;
   T doubt_ = T(0);            ///< the lost test's CUSUM [nats] (confirm)
-  FeatureId doubt_from_ = 0;  ///< while doubt_ > 0: the first id mapped since the doubt began
+  FeatureId doubt_from_ = 0;  ///< the first id mapped since this scan began, or (doubt_ > 0) since the doubt did
   bool skip_confirm_ = false;
   bool trust_prior_ = true;  ///< lost by being told (the pose covariance is the prior), not after a doubt
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
