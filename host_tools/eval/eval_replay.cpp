@@ -389,7 +389,6 @@ Subcommand add_replay_command(CLI::App& app) {
   return {rp, [o, mrclam_rules, rp]() {
             if (*mrclam_rules) {
               const RunOptions m = mrclam_run_defaults();
-              if (rp->count("--miss-probability") == 0) o->run.step.miss_probability = m.step.miss_probability;
               if (rp->count("--static-gate-level") == 0) o->run.step.static_gate_level = m.step.static_gate_level;
               if (rp->count("--new-if-taken") == 0)
                 o->run.step.new_if_candidates_taken = m.step.new_if_candidates_taken;

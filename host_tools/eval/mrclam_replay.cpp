@@ -143,7 +143,6 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
 
 RunOptions mrclam_run_defaults() {
   RunOptions o;
-  o.step.miss_probability = 1e-5f;
   o.step.static_gate_level = 0.95;
   o.step.new_if_candidates_taken = true;
   o.step.occlusion_rad = 0.03;

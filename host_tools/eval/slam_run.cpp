@@ -118,14 +118,10 @@ StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sen
   ss.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.max_range_m = sensor.max_range_m - opt.view_margin_m;
   ss.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
-  if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed
-    const StepSettings<double> d;
+  if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed (known landmarks are confirmed
+                                 // and the evidence never removes them, ekf::LandmarkPolicy)
     ss.augment = false;
-    ss.confirm_hits = 1;
-    ss.max_misses = d.max_misses;
-    ss.max_tentative_reviews = d.max_tentative_reviews;
-    ss.miss_probability = d.miss_probability;
-    ss.static_gate_level = d.static_gate_level;
+    ss.static_gate_level = StepSettings<double>{}.static_gate_level;
   }
   return ss;
 }

@@ -109,8 +109,7 @@ void worst_case(Transport& port, const proto::Capabilities& caps, const std::vec
     c.local_radius_m = 40.0f;
     c.max_range_m = 30.0f;
     c.node_budget = budget;
-    c.confirm_hits = 1;
-    c.max_misses = 255;
+    c.landmark_delete_nats = -1e5f;  // nothing removed: the map grows to the bound
     c.max_tentative_reviews = 255;
     link.configure(c);
     proto::Reset r;

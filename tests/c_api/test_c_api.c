@@ -197,8 +197,8 @@ static void test_slam_bit_for_bit(void) {
   const float x0[3] = {0.f, 0.f, 0.f}, P0[9] = {1e-4f, 0, 0, 0, 1e-4f, 0, 0, 0, 1e-4f};
   int k, i, steps = 0, landmarks_seen = 0;
   geojcbb_settings_default(&st);
-  st.local_radius_m = 20.f;    /* every landmark of the scene (ranges up to 15 m) is a candidate */
-  st.miss_probability = 1e-3f; /* options set through the C boundary reach the step */
+  st.local_radius_m = 20.f;       /* every landmark of the scene (ranges up to 15 m) is a candidate */
+  st.landmark_delete_nats = -6.f; /* options set through the C boundary reach the step */
   st.static_gate_level = 0.99;
   st.max_range_m = 15.f;
   st.half_fov_rad = 3.14159f;

@@ -317,16 +317,18 @@ void run(Input& in) {
         if (op & 0x10) view.occlusion_rad = in.f(T(0.05));
         ekf::LandmarkPolicy pol;
         if (op & 0x20) {
-          pol.confirm_hits = static_cast<int>(in.u8()) - 1;
-          pol.max_misses = static_cast<int>(in.u8() % 4);
+          pol.confirm_nats = in.f(10.0f);
+          pol.delete_nats = -in.f(10.0f);
+          pol.reserve_nats = in.f(5.0f);
           pol.max_tentative_reviews = static_cast<int>(in.u8() % 12) - 1;
-          pol.miss_probability = in.f(0.5f);
+          pol.p_detect = in.f(1.0f);
+          pol.clutter_density = in.f(0.01f);
           pol.static_gate_d2 = in.f(9.0f);
         }
         ekf::ReviewStats rs;
         poison(rs);
         const Snapshot<ekf::ReviewStats> rb(rs);
-        st = s.slam.review(s.pred, s.assoc, view, pol, rs);
+        st = s.slam.review(s.obs, s.pred, s.assoc, view, pol, rs);
         if (st != Status::kOk) {
           require(rb.same(rs));
         } else {

@@ -297,8 +297,9 @@ proto::Config config_from(Input& in) {
     c.half_fov_rad = in.f(1.5f);
   }
   if (which & 64) {
-    c.confirm_hits = in.u8();
-    c.max_misses = in.u8();
+    c.landmark_confirm_nats = static_cast<float>(in.u8()) * 0.1f;
+    c.landmark_delete_nats = -static_cast<float>(in.u8()) * 0.1f;
+    c.landmark_reserve_nats = static_cast<float>(in.u8()) * 0.1f;
     c.max_tentative_reviews = in.u8();
   }
   if (which & 128) c.stats_period_scans = static_cast<std::uint16_t>(in.u8() % 4);

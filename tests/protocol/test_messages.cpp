@@ -299,9 +299,6 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     c.occlusion_rad = -0.01f;
     rejects(c, Error::kOutOfRange);
     c = ok;
-    c.miss_probability = 1.0f;
-    rejects(c, Error::kOutOfRange);
-    c = ok;
     c.static_gate_level = 1.0f;
     rejects(c, Error::kOutOfRange);
     c = ok;
@@ -318,10 +315,15 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     c.half_fov_rad = 0.0f;
     rejects(c, Error::kOutOfRange);
     c = ok;
-    c.confirm_hits = 0;
+    c.landmark_confirm_nats = 0.0f;
     rejects(c, Error::kOutOfRange);
     c = ok;
-    c.max_misses = 0;
+    c.landmark_delete_nats = 0.0f;
+    rejects(c, Error::kOutOfRange);
+    c = ok;
+    c.landmark_reserve_nats = 0.0f;
+    rejects(c, Error::kOk);
+    c.landmark_reserve_nats = -0.01f;
     rejects(c, Error::kOutOfRange);
     c = ok;
     c.max_tentative_reviews = 0;
@@ -457,17 +459,17 @@ TEST_CASE("protocol: ranges and positive definiteness") {
 }
 
 TEST_CASE("protocol: SHUTDOWN and CONFIG's periodic STATS on the wire") {
-  // CONFIG's last field, after the 140 bytes of the step's options.
+  // CONFIG's last field, after the 145 bytes of the step's options.
   const std::vector<SchemaField> cf = schema_fields(MsgType::kConfig);
   REQUIRE(cf.back().name == "stats_period_scans");
   CHECK(cf.back().type == "u16");
-  CHECK(cf.back().offset == 140);
+  CHECK(cf.back().offset == 145);
   Config c = sample<Config>();
   c.stats_period_scans = 0x0102;
   const Bytes pl = payload_of(c);
-  REQUIRE(pl.size() == 142);
-  CHECK(pl[140] == 0x02);
-  CHECK(pl[141] == 0x01);
+  REQUIRE(pl.size() == 147);
+  CHECK(pl[145] == 0x02);
+  CHECK(pl[146] == 0x01);
   CHECK(Config{}.stats_period_scans == 0);  // off unless asked for
   Config out{};
   REQUIRE(out.decode(pl.data(), pl.size()) == Error::kOk);

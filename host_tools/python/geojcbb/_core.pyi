@@ -65,10 +65,10 @@ class Options(TypedDict, total=False):
     sensor_x_m: float  # default 0
     sensor_y_m: float  # default 0
     sensor_theta_rad: float  # default 0
-    confirm_hits: int  # default 2
-    max_misses: int  # default 2
+    landmark_confirm_nats: float  # default 4.6
+    landmark_delete_nats: float  # default -4
+    landmark_reserve_nats: float  # default 4.6
     max_tentative_reviews: int  # default 10
-    confirm_min_reviews: int  # default 0
     tentative_isolated: bool  # default 0
     joint_recheck: bool  # default 1
     ambiguity_margin: float  # default 0
@@ -83,7 +83,6 @@ class Options(TypedDict, total=False):
     rjc_tries: int  # default 8
     rjc_subset: int  # default 8
     occlusion_rad: float  # default 0
-    miss_probability: float  # default 0
     static_gate_level: float  # default 0
     first_estimates_jacobians: bool  # default 1
     augment: bool  # default 1

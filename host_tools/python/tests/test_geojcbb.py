@@ -189,8 +189,8 @@ def test_every_option_is_a_keyword_and_its_range_is_enforced():
     z, R, h, C, ids = make_scene(rng, 4, 4)
     geojcbb.associate(z, R, h, C, ids, strategy="JCBB+V", confidence=0.95, rjc=True, rjc_tries=4)
     assert status_of(lambda: geojcbb.associate(z, R, h, C, ids, strategy="JCBB", rjc_tries=0)) == "kInvalidInput"
-    assert status_of(lambda: geojcbb.Slam("JCBB", miss_probability=1.0)) == "kInvalidInput"
-    geojcbb.Slam("jcbb+v", miss_probability=0.001, static_gate_level=0.99, occlusion_rad=0.03)
+    assert status_of(lambda: geojcbb.Slam("JCBB", landmark_delete_nats=0.5)) == "kInvalidInput"
+    geojcbb.Slam("jcbb+v", landmark_delete_nats=-6.0, static_gate_level=0.99, occlusion_rad=0.03)
     with pytest.raises(TypeError):
         geojcbb.Slam("JCBB", strategy="ICNN")
 

@@ -217,7 +217,7 @@ TEST_CASE_TEMPLATE("packed covariance against a dense reference: predict, update
       REQUIRE(g->slam.augment(z, R, id) == Status::kOk);
       check_close(g->slam, big, "augment");
     }
-    // removal (compaction): an unpaired tentative landmark in view is removed after max_misses.
+    // removal (compaction): an unpaired tentative landmark in view is removed at delete_nats.
     {
       const Dense before = dense(g->slam);
       const int n = g->slam.landmarks();
@@ -233,10 +233,14 @@ TEST_CASE_TEMPLATE("packed covariance against a dense reference: predict, update
       // Drop by policy every landmark with one hit that was expected and not paired (the newest,
       // and any the capacity of pairings left out), so removals fall in the middle too.
       LandmarkPolicy pol;
-      pol.max_misses = 1;
+      pol.delete_nats = -1.0f;  // one miss (-2.3 nats) removes a landmark that was never paired
       Visibility<T> view{T(0), T(1e6), T(4), T(0)};
       ReviewStats rs;
-      REQUIRE(g->slam.review(g->pred, g->assoc, view, pol, rs) == Status::kOk);
+      g->obs.clear();
+      for (int i = 0; i < g->assoc.count; ++i) {
+        REQUIRE(g->obs.push(Vec2<T>(T(1), T(0)), Mat2<T>::Identity() * T(0.01)) == Status::kOk);  // z not read
+      }
+      REQUIRE(g->slam.review(g->obs, g->pred, g->assoc, view, pol, rs) == Status::kOk);
       REQUIRE(rs.removed >= 1);
       std::vector<int> rows = {0, 1, 2};
       // Map each survivor to its old index by its mean (unique per landmark; review() does not move it).

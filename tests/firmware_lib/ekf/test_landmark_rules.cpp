@@ -1,6 +1,7 @@
 // EKF landmark life cycle and filter options (MRCLAM): an object that moves is removed by the
-// static gate; a confirmed landmark missed in view far more often than its own detection rate allows
-// is removed, one seen at its rate is kept; two landmarks 0.15 m apart, the second first seen from
+// static gate; existence by evidence: a landmark that is gone is removed after the misses its
+// saturated log-odds allows, one seen at half the scans is kept, a new one missed twice goes, a
+// known one never; two landmarks 0.15 m apart, the second first seen from
 // near, become two landmarks, not one and not three; known landmarks; first-estimates Jacobians;
 // the sensor and drive models; bad input changes no state; no allocation.
 #include <doctest/doctest.h>
@@ -41,7 +42,7 @@ ReviewStats scan(Rig<T>& r, const Vec2<T>& z, FeatureId id, const LandmarkPolicy
   r.assoc.feature[0] = id;
   if (id >= 0) REQUIRE(r.slam.update(r.obs, r.assoc, r.ws) == Status::kOk);
   ReviewStats rs;
-  REQUIRE(r.slam.review(r.pred, r.assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, policy, rs) == Status::kOk);
+  REQUIRE(r.slam.review(r.obs, r.pred, r.assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, policy, rs) == Status::kOk);
   return rs;
 }
 }  // namespace
@@ -78,41 +79,103 @@ TEST_CASE_TEMPLATE("static gate: a landmark that follows a moving object is remo
   }
 }
 
-TEST_CASE_TEMPLATE("miss probability: missed far beyond its own rate is removed; seen at its rate stays", T, float,
-                   double) {
+TEST_CASE_TEMPLATE("existence: gone is removed after the misses its log-odds allows; seen at half the scans stays", T,
+                   float, double) {
+  // The default policy: p_D 0.9, 0.003 clutter per m^2. Here p_FA ~ 4e-5 (a 2 cm x 0.3 deg gate at 4 m), so
+  // a pairing adds ~10 nats (the log-odds saturates at 4.6 + 4.6 nats) and a miss -2.30: from 9.2, six
+  // misses in a row reach -4.6 <= delete_nats (-4), five (-2.3) do not.
   for (const bool gone : {true, false}) {
     auto r = std::make_unique<Rig<T>>();
     REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
-    FeatureId id = -1;
-    FeatureId other = -1;
+    FeatureId id = -1, other = -1, known = -1;
     const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
     REQUIRE(r->slam.augment(Vec2<T>(T(4), T(0)), R, id) == Status::kOk);
     REQUIRE(r->slam.augment(Vec2<T>(T(5), T(0.3)), R, other) == Status::kOk);
-    LandmarkPolicy policy;
-    policy.miss_probability = 1e-3f;
+    REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(6), T(-1)), Mat2<T>::Identity() * T(1e-4), known) == Status::kOk);
+    const LandmarkPolicy policy;
     const Vec2<T> z(T(4), T(0));
-    // Seen in every second scan for 40 scans: a detection rate of about 0.5.
-    for (int k = 0; k < 40; ++k) (void)scan(*r, z, k % 2 == 0 ? id : -1, policy);
+    // The landmark never paired (clutter): in view and missed on the first two reviews, removed.
+    ReviewStats rs = scan(*r, z, id, policy);
+    CHECK(rs.confirmed == 1);  // id: one re-sighting confirms
+    CHECK(r->slam.confirmed(r->slam.index_of(id)));
+    CHECK(r->slam.existence(r->slam.index_of(id)) ==
+          doctest::Approx(double(policy.confirm_nats + policy.reserve_nats)));
+    CHECK(r->slam.index_of(other) >= 0);
+    CHECK(r->slam.existence(r->slam.index_of(other)) == doctest::Approx(-2.3026).epsilon(1e-3));
+    rs = scan(*r, z, -1, policy);
+    CHECK(r->slam.index_of(other) == -1);
+    CHECK(rs.removed == 1);
+    CHECK(rs.removed_missed == 0);  // it was tentative
+    // Seen in every second scan for 40 scans: a detection rate of 0.5 (the log-odds 9.2, 6.9, 9.2, ...).
+    for (int k = 2; k < 40; ++k) (void)scan(*r, z, k % 2 == 0 ? id : -1, policy);
     REQUIRE(r->slam.index_of(id) >= 0);
-    // Then: gone (never seen again), or seen at its rate.
+    // Then: gone (never seen again), or seen at its rate. The last scan above was a miss (6.9).
     int removed_at = -1;
     for (int k = 0; k < 60 && removed_at < 0; ++k) {
-      const ReviewStats rs = scan(*r, z, !gone && k % 2 == 0 ? id : -1, policy);
+      rs = scan(*r, z, !gone && k % 2 == 0 ? id : -1, policy);
       if (rs.removed_missed > 0) removed_at = k + 1;
     }
     CAPTURE(gone);
     if (gone) {
-      // (1 - p)^n < 1e-3 with p about 0.5: n = 10 misses in a row.
-      CHECK(removed_at >= 9);
-      CHECK(removed_at <= 11);
+      CHECK(removed_at == 5);
       CHECK(r->slam.index_of(id) == -1);
     } else {
       CHECK(removed_at == -1);
       CHECK(r->slam.index_of(id) >= 0);
     }
-    // The other landmark, never paired, is tentative: the tentative rule removed it, not this one.
-    CHECK(r->slam.index_of(other) == -1);
+    // The known landmark, in view and never paired for 40 + reviews: kept, confirmed.
+    const int jk = r->slam.index_of(known);
+    REQUIRE(jk >= 0);
+    CHECK(r->slam.confirmed(jk));
+    CHECK(r->slam.existence(jk) < T(-50));
   }
+}
+
+TEST_CASE_TEMPLATE("existence: removal marginalises the landmark and P stays positive definite", T, float, double) {
+  // Eight landmarks around the robot, paired on three scans; then half of them are never seen again.
+  // Each removal drops the landmark's rows and columns (exact marginalisation for an EKF; that the
+  // compaction keeps every other entry is test_covariance's "removal"): P stays positive definite.
+  auto r = std::make_unique<Rig<T>>();
+  REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
+  const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.05 * 0.05), T(0.01 * 0.01)).asDiagonal());
+  std::vector<Vec2<T>> zs;
+  for (int k = 0; k < 8; ++k) {
+    const Vec2<T> z(T(3) + T(0.5) * T(k), T(-1) + T(0.25) * T(k));
+    FeatureId id = -1;
+    REQUIRE(r->slam.augment(z, R, id) == Status::kOk);
+    zs.push_back(z);
+  }
+  const Visibility<T> view{T(0.5), T(20), T(1.2)};
+  auto one_scan = [&](bool all) {
+    LocalMapStats st;
+    REQUIRE(r->slam.predict_local(T(30), r->ws, r->pred, st) == Status::kOk);
+    r->obs.clear();
+    r->assoc.count = 0;
+    for (int j = 0; j < r->slam.landmarks(); ++j) {
+      const FeatureId id = r->slam.id(j);
+      if (!all && id % 2 == 1) continue;
+      REQUIRE(r->obs.push(zs[static_cast<std::size_t>(id)], R) == Status::kOk);
+      r->assoc.feature[r->assoc.count++] = id;
+    }
+    REQUIRE(r->slam.update(r->obs, r->assoc, r->ws) == Status::kOk);
+    ReviewStats rs;
+    REQUIRE(r->slam.review(r->obs, r->pred, r->assoc, view, LandmarkPolicy{}, rs) == Status::kOk);
+    return rs;
+  };
+  for (int k = 0; k < 3; ++k) (void)one_scan(true);
+  int removed = 0;
+  for (int k = 0; k < 10 && r->slam.landmarks() > 4; ++k) {
+    const ReviewStats rs = one_scan(false);
+    removed += rs.removed;
+    const int m = r->slam.dim();
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic> Pm(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) Pm(a, b) = double(r->slam.cov(a, b));
+    CHECK(Pm.llt().info() == Eigen::Success);
+  }
+  CHECK(removed == 4);
+  REQUIRE(r->slam.landmarks() == 4);
+  for (int j = 0; j < 4; ++j) CHECK(r->slam.id(j) % 2 == 0);
 }
 
 TEST_CASE_TEMPLATE("two landmarks 0.15 m apart, the second first seen from near: two landmarks, not one or three", T,
@@ -199,13 +262,24 @@ TEST_CASE_TEMPLATE("known landmarks: added uncorrelated with their covariance; b
   REQUIRE(r->slam.predict_local(T(30), r->ws, r->pred, st) == Status::kOk);
   const std::vector<unsigned char> full = bytes_of(r->slam);
   LandmarkPolicy bad;
-  bad.miss_probability = 1.0f;
+  bad.reserve_nats = -1.0f;
   r->assoc.count = 0;
+  r->obs.clear();
   ReviewStats rs;
-  CHECK(r->slam.review(r->pred, r->assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, bad, rs) == Status::kInvalidInput);
+  const Visibility<T> view{T(0.5), T(20), T(1.2)};
+  CHECK(r->slam.review(r->obs, r->pred, r->assoc, view, bad, rs) == Status::kInvalidInput);
   bad = LandmarkPolicy{};
   bad.static_gate_d2 = -1.0f;
-  CHECK(r->slam.review(r->pred, r->assoc, Visibility<T>{T(0.5), T(20), T(1.2)}, bad, rs) == Status::kInvalidInput);
+  CHECK(r->slam.review(r->obs, r->pred, r->assoc, view, bad, rs) == Status::kInvalidInput);
+  bad = LandmarkPolicy{};
+  bad.delete_nats = 0.5f;  // must be below the start (0)
+  CHECK(r->slam.review(r->obs, r->pred, r->assoc, view, bad, rs) == Status::kInvalidInput);
+  bad = LandmarkPolicy{};
+  bad.p_detect = 1.0f;
+  CHECK(r->slam.review(r->obs, r->pred, r->assoc, view, bad, rs) == Status::kInvalidInput);
+  r->assoc.count = 1;  // one pairing, no observation
+  r->assoc.feature[0] = 0;
+  CHECK(r->slam.review(r->obs, r->pred, r->assoc, view, LandmarkPolicy{}, rs) == Status::kInvalidInput);
   CHECK(bytes_of(r->slam) == full);
 }
 
@@ -275,7 +349,6 @@ TEST_CASE_TEMPLATE("the landmark rules and known landmarks allocate nothing", T,
   FeatureId id = -1;
   LandmarkPolicy policy;
   policy.static_gate_d2 = 13.8f;
-  policy.miss_probability = 1e-3f;
   test::AllocationGuard guard;
   REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(4), T(0)), Mat2<T>::Identity() * T(1e-4), id) == Status::kOk);
   for (int k = 0; k < 30; ++k) (void)scan(*r, Vec2<T>(T(4), T(0.001) * T(k % 2)), k % 3 == 0 ? id : -1, policy);

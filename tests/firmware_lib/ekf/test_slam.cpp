@@ -258,13 +258,13 @@ TEST_CASE_TEMPLATE("the filter allocates nothing", T, float, double) {
   ReviewStats rs;
   const Visibility<T> view{T(0.5), T(7), T(1.5)};
   LandmarkPolicy strict;
-  strict.max_misses = 1;
+  strict.delete_nats = -1.0f;  // one miss removes a new landmark
   CHECK(allocations_during([&] {
           s1 = f->slam.predict(Odometry<T>{T(1), T(0.1), T(0.1), T(0.05), T(0.02)});
           s2 = f->slam.predict_local(T(8), f->ws, f->pred, st);
           s3 = f->slam.update(f->obs, f->assoc, f->ws);
           s4 = f->slam.augment(Vec2<T>(T(2), T(0.3)), Mat2<T>::Identity() * T(0.01), id);
-          s5 = f->slam.review(f->pred, f->assoc, view, strict, rs);
+          s5 = f->slam.review(f->obs, f->pred, f->assoc, view, strict, rs);
         }) == 0);
   CHECK(s1 == Status::kOk);
   CHECK(s2 == Status::kOk);
@@ -351,22 +351,27 @@ TEST_CASE_TEMPLATE("review removes tentative landmarks that are missed, and keep
   REQUIRE(f->slam.predict_local(T(20), f->ws, f->pred, st) == Status::kOk);
   REQUIRE(f->pred.count == 5);
   const Visibility<T> view{T(0.5), T(10), T(1.5)};
-  LandmarkPolicy policy;  // confirm at 2 hits, remove at 2 misses
+  LandmarkPolicy policy;  // the default: a pairing confirms, two misses remove a new landmark
   // Scan 1: landmarks 0, 2 and 4 paired (confirmed); 1 and 3 missed once.
+  const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.05 * 0.05), T(0.01 * 0.01)).asDiagonal());
+  f->obs.clear();
+  for (int i = 0; i < 3; ++i) REQUIRE(f->obs.push(Vec2<T>(T(3), T(0)), R) == Status::kOk);  // z is not read
   f->assoc.count = 3;
   f->assoc.feature[0] = 4;
   f->assoc.feature[1] = 0;
   f->assoc.feature[2] = 2;
   ReviewStats rs;
-  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  REQUIRE(f->slam.review(f->obs, f->pred, f->assoc, view, policy, rs) == Status::kOk);
   CHECK(rs.expected == 5);
   CHECK(rs.paired == 3);
+  CHECK(rs.confirmed == 3);
   CHECK(rs.removed == 0);
   CHECK(f->slam.landmarks() == 5);
   // Scan 2: nothing paired: 1 and 3 reach two misses and go; 0, 2, 4 are confirmed and stay.
   auto before = std::make_unique<Slam<T, EB>>(f->slam);
   f->assoc.count = 0;
-  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  f->obs.clear();
+  REQUIRE(f->slam.review(f->obs, f->pred, f->assoc, view, policy, rs) == Status::kOk);
   CHECK(rs.removed == 2);
   REQUIRE(f->slam.landmarks() == 3);
   const int kept[3] = {0, 2, 4};
@@ -409,15 +414,18 @@ TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is 
   const Visibility<T> view{T(0.5), T(10), T(1.5)};
   LandmarkPolicy policy;
   policy.max_tentative_reviews = 4;
+  f->obs.clear();
+  REQUIRE(f->obs.push(Vec2<T>(T(4), T(0)), Mat2<T>(Vec2<T>(T(0.05 * 0.05), T(0.01 * 0.01)).asDiagonal())) ==
+          Status::kOk);
   f->assoc.count = 1;
   f->assoc.feature[0] = 0;  // the one ahead is paired: confirmed
   ReviewStats rs;
   for (int k = 0; k < 3; ++k) {
-    REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+    REQUIRE(f->slam.review(f->obs, f->pred, f->assoc, view, policy, rs) == Status::kOk);
     CHECK(rs.expected == 1);
     CHECK(f->slam.landmarks() == 2);  // out of view: no misses, not yet too old
   }
-  REQUIRE(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kOk);
+  REQUIRE(f->slam.review(f->obs, f->pred, f->assoc, view, policy, rs) == Status::kOk);
   CHECK(rs.removed == 1);  // fourth review: tentative for too long
   REQUIRE(f->slam.landmarks() == 1);
   CHECK(f->slam.id(0) == 0);
@@ -425,13 +433,14 @@ TEST_CASE_TEMPLATE("review: out of view is no miss; unconfirmed for too long is 
   auto snapshot = std::make_unique<Slam<T, EB>>(f->slam);
   auto same = [&] { return std::memcmp(snapshot.get(), &f->slam, sizeof(f->slam)) == 0; };
   LandmarkPolicy bad;
-  bad.max_misses = 0;
-  CHECK(f->slam.review(f->pred, f->assoc, view, bad, rs) == Status::kInvalidInput);
-  CHECK(f->slam.review(f->pred, f->assoc, Visibility<T>{T(5), T(1), T(1)}, policy, rs) == Status::kInvalidInput);
-  CHECK(f->slam.review(f->pred, f->assoc, Visibility<T>{T(0), std::numeric_limits<T>::infinity(), T(1)}, policy, rs) ==
+  bad.confirm_nats = 0.0f;
+  CHECK(f->slam.review(f->obs, f->pred, f->assoc, view, bad, rs) == Status::kInvalidInput);
+  CHECK(f->slam.review(f->obs, f->pred, f->assoc, Visibility<T>{T(5), T(1), T(1)}, policy, rs) ==
         Status::kInvalidInput);
+  CHECK(f->slam.review(f->obs, f->pred, f->assoc, Visibility<T>{T(0), std::numeric_limits<T>::infinity(), T(1)}, policy,
+                       rs) == Status::kInvalidInput);
   f->assoc.count = EB::kMaxObservations + 1;
-  CHECK(f->slam.review(f->pred, f->assoc, view, policy, rs) == Status::kInvalidInput);
+  CHECK(f->slam.review(f->obs, f->pred, f->assoc, view, policy, rs) == Status::kInvalidInput);
   CHECK(same());
 }
 

@@ -1,5 +1,5 @@
-// Tentative landmarks that cannot move the robot (StepSettings::tentative_isolated,
-// confirm_min_reviews; docs/tentative.md): a mover (6 cm/s) paired only with its own tentative
+// Tentative landmarks that cannot move the robot (StepSettings::tentative_isolated, a high
+// landmark_confirm_nats; docs/tentative.md): a mover (6 cm/s) paired only with its own tentative
 // landmark, never moving the pose (bit for bit against the same scans without it), caught by the
 // static gate and never paired after; a static new landmark paired while tentative, then
 // confirmed; the Schmidt update (ekf::Slam::update_alone) moves one landmark only, refuses bad
@@ -24,26 +24,18 @@ using B = DefaultBounds;
 template <typename T>
 using Rig = test::RelocRig<T, B>;
 
-/// JCBB mapping as it goes (nothing known): 3 hits and 20 reviews confirm, the static gate at 0.99,
-/// tentative landmarks isolated.
+/// JCBB mapping as it goes (nothing known): 100 nats of evidence confirm (about 14 pairings of ~7
+/// nats here), the static gate at 0.99, tentative landmarks isolated.
 template <typename T>
 StepSettings<T> tentative_settings() {
   StepSettings<T> s = test::reloc_settings<T>();
   s.augment = true;
-  s.confirm_hits = 3;
-  s.confirm_min_reviews = 20;
+  s.landmark_confirm_nats = 100.0f;
+  s.landmark_reserve_nats = 0.0f;
   s.max_tentative_reviews = 30;
   s.static_gate_level = 0.99;
   s.tentative_isolated = true;
   return s;
-}
-
-/// The landmark policy SlamStep::configure builds from tentative_settings (the same binding).
-template <typename T>
-ekf::LandmarkPolicy tentative_policy() {
-  ekf::LandmarkPolicy p;
-  ekf::bind_options(tentative_settings<T>(), p);
-  return p;
 }
 
 /// A robot standing at `x` that has seen the map for 25 scans: every landmark in view confirmed.
@@ -58,7 +50,7 @@ std::unique_ptr<Rig<T>> standing_rig(const std::vector<Eigen::Vector2d>& map, co
     REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
   }
   for (int j = 0; j < rig->step.slam().landmarks(); ++j) {
-    REQUIRE(rig->step.slam().confirmed(j, tentative_policy<T>()));
+    REQUIRE(rig->step.slam().confirmed(j));
   }
   return rig;
 }
@@ -110,11 +102,12 @@ TEST_CASE_TEMPLATE("tentative: a mover never moves the pose, is caught, and is n
       CHECK(with->out.outcome[last] == node::Outcome::kPaired);  // with its own tentative landmark
       const int j = with->step.slam().index_of(with->out.feature[last]);
       REQUIRE(j >= 0);
-      CHECK(!with->step.slam().confirmed(j, tentative_policy<T>()));
+      CHECK(!with->step.slam().confirmed(j));
+      CHECK(with->step.slam().existence(j) < T(100));
     }
   }
-  // The static gate's time to catch it at 6 cm/s, 5 m away, sigma 0.1 m and 1 degree: under the 20
-  // reviews that would confirm it.
+  // The static gate's time to catch it at 6 cm/s, 5 m away, sigma 0.1 m and 1 degree: before the
+  // evidence would confirm it (the static landmark of the next test is confirmed after 10 or more).
   MESSAGE("mover caught after ", caught_at, " scans (", 0.06 * caught_at, " m moved)");
   CHECK(caught_at > 0);
   CHECK(caught_at < 20);
@@ -129,6 +122,7 @@ TEST_CASE_TEMPLATE("tentative: a static new landmark is paired while tentative, 
   auto without = standing_rig<T>(map, x);
   const Eigen::Vector2d post(4 * std::cos(0.1), 4 * std::sin(0.1));  // not in the map
   FeatureId id = -1;
+  int confirmed_at = -1;
   for (int k = 0; k < 25; ++k) {
     observe_with(map, x, post, with->obs);
     observe_from(map, x, without->obs);
@@ -144,11 +138,15 @@ TEST_CASE_TEMPLATE("tentative: a static new landmark is paired while tentative, 
     CHECK(with->out.feature[last] == id);
     const int j = with->step.slam().index_of(id);
     REQUIRE(j >= 0);
-    // Reviews so far: k + 1. Tentative until 20 (its pairs then move only itself).
-    const bool confirmed = with->step.slam().confirmed(j, tentative_policy<T>());
-    CHECK(confirmed == (k + 1 >= 20));
-    if (k + 1 <= 20) check_same_pose(*with, *without);
+    // Tentative until its log-odds reaches 100 nats (its pairs then move only itself).
+    const bool confirmed = with->step.slam().confirmed(j);
+    CHECK(confirmed == (with->step.slam().existence(j) >= T(100)));
+    if (!confirmed) check_same_pose(*with, *without);
+    if (confirmed && confirmed_at < 0) confirmed_at = k + 1;
   }
+  MESSAGE("static new landmark confirmed after ", confirmed_at, " reviews");
+  CHECK(confirmed_at >= 10);
+  CHECK(confirmed_at <= 20);
   CHECK(with->step.movers_caught() == 0);
   const int j = with->step.slam().index_of(id);
   REQUIRE(j >= 0);

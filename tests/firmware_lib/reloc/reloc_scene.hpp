@@ -62,8 +62,7 @@ StepSettings<T> reloc_settings() {
   s.local_radius_m = T(25);
   s.max_range_m = T(20);
   s.half_fov_rad = T(1.5);
-  s.augment = false;
-  s.confirm_hits = 1;
+  s.augment = false;  // known landmarks are confirmed (ekf::LandmarkPolicy)
   return s;
 }
 

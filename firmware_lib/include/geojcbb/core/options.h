@@ -49,14 +49,14 @@
   X(REAL, sensor_y_m, 0, (CLOSED, -100, 100), "m", "--sensor-y", "where the sensor sits on the robot: to the left") \
   X(REAL, sensor_theta_rad, 0, (CLOSED, -3.1415927410125732, 3.1415927410125732), "rad", "--sensor-heading", \
     "the sensor's heading on the robot (its bearing 0 in the body frame)") \
-  X(INT, confirm_hits, 2, (CLOSED, 1, 255), "", "--confirm-hits", \
-    "pairings (the first sighting included) that confirm a tentative landmark") \
-  X(INT, max_misses, 2, (CLOSED, 1, 255), "", "--max-misses", \
-    "misses where expected in view that remove a tentative landmark") \
+  X(F32, landmark_confirm_nats, 4.6, (OPEN, 0, 1e6), "nats", "--confirm-nats", \
+    "log-odds of existence (+log(pD/pFA) per pairing, +log((1-pD)/(1-pFA)) per miss) that confirms a landmark") \
+  X(F32, landmark_delete_nats, -4, (OPEN, -1e6, 0), "nats", "--delete-nats", \
+    "log-odds of existence at or below which a landmark, confirmed or not, is removed (a new one starts at 0)") \
+  X(F32, landmark_reserve_nats, 4.6, (GE, 0, 0), "nats", "--reserve-nats", \
+    "log-odds of existence a landmark holds at most beyond landmark_confirm_nats: misses that remove one seen long") \
   X(INT, max_tentative_reviews, 10, (CLOSED, 1, 255), "", "--max-tentative-reviews", \
-    "reviews a landmark may stay tentative before it is removed") \
-  X(INT, confirm_min_reviews, 0, (CLOSED, 0, 255), "scans", "--confirm-min-reviews", \
-    "reviews a landmark must also have lived to be confirmed (< max_tentative_reviews): time to catch a mover") \
+    "reviews a landmark may stay tentative (below landmark_confirm_nats) before it is removed") \
   X(BOOL, tentative_isolated, 0, (ANY, 0, 0), "", "--tentative-isolated", \
     "tentative landmarks are paired after the association, one observation each, and update only themselves") \
   X(BOOL, joint_recheck, 1, (ANY, 0, 0), "", "--joint-recheck", \
@@ -84,8 +84,6 @@
     "observations searched by JCBB in an RJC try, at most the capacity's MaxObservations") \
   X(REAL, occlusion_rad, 0, (CLOSED, 0, 3.1415927410125732), "rad", "--occlusion", \
     "a landmark with a nearer one within this bearing is hidden, so not expected (0: off)") \
-  X(F32, miss_probability, 0, (ROPEN, 0, 1), "", "--miss-probability", \
-    "remove a landmark missed in view so often that a static one would be so with less than this (0: off)") \
   X(F64, static_gate_level, 0, (ROPEN, 0, 1), "", "--static-gate-level", \
     "remove a landmark whose estimate leaves, at this chi-square level, where it was added (0: off)") \
   X(BOOL, first_estimates_jacobians, 1, (ANY, 0, 0), "", "--fej", \
@@ -119,9 +117,9 @@
   X(REAL, loop_inflation, 4, (GE, 1, 0), "", "--loop-inflation", \
     "a committed closure grows the pose block by this times (the correction squared + the fit's covariance)") \
   X(REAL, loop_detection_probability, 0.9, (OPEN, 0, 1), "", "--loop-pd", \
-    "set likelihood (relocaliser, loop check, window): the probability that a landmark in view is observed") \
+    "p_D: a landmark in view is observed (set likelihood: relocaliser, loop check, window, lost test; existence)") \
   X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
-    "set likelihood: observations per m^2 that no landmark of the hypothesis explains (clutter, newer landmarks)") \
+    "observations per m^2 no landmark explains (clutter, newer landmarks): set likelihood; existence's pFA") \
   X(REAL, loop_merge_d2, 0, (GE, 0, 0), "", "--loop-merge-d2", \
     "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)") \
   X(INT, hypothesis_rivals, 0, (CLOSED, 0, 2), "", "--hypothesis-rivals", \

@@ -16,44 +16,53 @@
 
 namespace geojcbb::ekf {
 
-/// Tentative landmarks: a landmark is confirmed once it has been paired `confirm_hits` times (its
-/// first sighting counts). Until then it is removed when it has been expected in view and not
-/// paired `max_misses` times, or when `max_tentative_reviews` reviews have passed (it left the view
-/// unconfirmed). This keeps clutter that passed the augmentation gate out of the map.
-/// Objects that move (another robot) are removed even when confirmed, by two rules (0: off):
-///   miss_probability  expected in view and missed so often in a row that a static landmark seen at
-///                     this landmark's own rate, p = (hits + 1) / (expected + 2), would be missed
-///                     so with a probability below this: (1 - p)^streak < miss_probability;
+/// Existence by evidence (docs/design.md, "Landmarks that exist by evidence"): each landmark keeps
+/// the log-odds [nats] that it exists, a sequential probability ratio test in the style of the track
+/// initiation of multi-target trackers. Added at 0 (a detection nothing explains is as likely a new
+/// landmark as clutter), then on each review where it is paired or expected in view:
+///   paired              + log(p_D / p_FA)
+///   in view, missed     + log((1 - p_D) / (1 - p_FA))
+/// p_D = p_detect: a landmark in view is detected; p_FA: a clutter detection falls in its gate,
+/// clutter_density (per m^2) times the gate's area, pi gate_d2 sqrt|S| r in (range, bearing) at the
+/// predicted range r (S = H P H^T + R; ExistenceEvidence). The log-odds saturates at confirm_nats +
+/// reserve_nats (a landmark seen for an hour can still leave); it is confirmed (for good) once it reaches
+/// confirm_nats and removed at or below delete_nats, confirmed or not. An M-of-N rule is the special
+/// case of constant increments: with p_D = 0.9, p_FA ~ 0.002 a pairing adds ~6.1 nats and a miss
+/// ~-2.3, so one re-sighting confirms and two misses remove a new landmark (confirm_hits 2,
+/// max_misses 2 before). A landmark that stays tentative max_tentative_reviews reviews (it left the
+/// view undecided) is removed: the test truncated. A known landmark (a surveyed map) is confirmed
+/// and never removed by the evidence.
+/// Objects that move (another robot) also leave by the static gate (0: off):
 ///   static_gate_d2    paired, but its estimate has moved further than refining a static point can:
 ///                     (l - l0)^T (P0 - P + f I)^-1 (l - l0) > static_gate_d2, with l0 and P0 the
 ///                     landmark's position and covariance when it was added, P its covariance now
 ///                     (for a static point l - l0 has covariance P0 - P) and f = (1 cm)^2.
-/// A landmark also needs `confirm_min_reviews` reviews of life to count as confirmed (confirmed()):
-/// the time in which the static gate can catch a slow mover before it is trusted; it must be less
-/// than max_tentative_reviews, and the tentative rules above apply until then.
 struct LandmarkPolicy {
-  int confirm_hits = 2;
-  int max_misses = 2;
+  float confirm_nats = 4.6f;
+  float delete_nats = -4.0f;
+  float reserve_nats = 4.6f;
   int max_tentative_reviews = 10;
-  float miss_probability = 0.0f;
+  float p_detect = 0.9f;
+  float clutter_density = 0.003f;
+  float gate_d2 = 9.21f;  ///< the association's individual gate (the area p_FA is taken over)
   float static_gate_d2 = 0.0f;
-  int confirm_min_reviews = 0;
   bool valid() const {
-    return confirm_hits >= 1 && confirm_hits <= 255 && max_misses >= 1 && max_misses <= 255 &&
-           max_tentative_reviews >= 1 && max_tentative_reviews <= 255 && miss_probability >= 0.0f &&
-           miss_probability < 1.0f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f && confirm_min_reviews >= 0 &&
-           confirm_min_reviews < max_tentative_reviews;
+    return delete_nats < 0.0f && delete_nats > -1e30f && confirm_nats > 0.0f && confirm_nats < 1e30f &&
+           reserve_nats >= 0.0f && reserve_nats < 1e30f && max_tentative_reviews >= 1 && max_tentative_reviews <= 255 &&
+           p_detect > 0.0f && p_detect < 1.0f && clutter_density > 0.0f && clutter_density < 1e30f && gate_d2 > 0.0f &&
+           gate_d2 < 1e30f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f;
   }
 };
-/// LandmarkPolicy's members that are options of the table, (member, option); static_gate_d2 is the
-/// chi-square quantile of static_gate_level (node::SlamStep::configure).
+/// LandmarkPolicy's members that are options of the table, (member, option); node::SlamStep::configure
+/// sets the others: p_detect and clutter_density from loop_detection_probability and
+/// loop_unexplained_density (the set likelihood's, one home for both), gate_d2 the association's
+/// individual gate, static_gate_d2 the chi-square quantile of static_gate_level.
 // clang-format off
-#define GEOJCBB_LANDMARK_POLICY_OPTIONS(F)        \
-  F(confirm_hits, confirm_hits)                   \
-  F(max_misses, max_misses)                       \
-  F(max_tentative_reviews, max_tentative_reviews) \
-  F(miss_probability, miss_probability)           \
-  F(confirm_min_reviews, confirm_min_reviews)
+#define GEOJCBB_LANDMARK_POLICY_OPTIONS(F)             \
+  F(confirm_nats, landmark_confirm_nats)               \
+  F(delete_nats, landmark_delete_nats)                 \
+  F(reserve_nats, landmark_reserve_nats)               \
+  F(max_tentative_reviews, max_tentative_reviews)
 // clang-format on
 /// out's options of the table from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
 template <class In>
@@ -61,21 +70,49 @@ void bind_options(const In& in, LandmarkPolicy& out) {
   GEOJCBB_LANDMARK_POLICY_OPTIONS(GEOJCBB_BIND_OPTION)
 }
 
+/// One review's increments of the log-odds of existence, from the policy (LandmarkPolicy): one
+/// square root and one logarithm per landmark in view.
+template <typename T>
+struct ExistenceEvidence {
+  T log_pd;      ///< log p_D
+  T log_miss;    ///< log(1 - p_D)
+  T area_coeff;  ///< clutter_density pi gate_d2: p_FA = area_coeff sqrt(r^2 |S|)
+  explicit ExistenceEvidence(const LandmarkPolicy& p)
+      : log_pd(std::log(T(p.p_detect))),
+        log_miss(std::log(T(1) - T(p.p_detect))),
+        area_coeff(T(p.clutter_density) * kPi<T> * T(p.gate_d2)) {}
+  /// p_FA for a gate of |S| (range, bearing) at range r (r2_det = r^2 |S|), within [1e-9, 0.5]: a
+  /// gate half full of clutter makes a detection little evidence, and never evidence against.
+  T pfa(T r2_det) const {
+    const T p = area_coeff * std::sqrt(std::max(r2_det, T(0)));
+    return p > T(0.5) ? T(0.5) : (p > T(1e-9) ? p : T(1e-9));
+  }
+  T hit(T pfa) const { return log_pd - std::log(pfa); }
+  T miss(T pfa) const { return log_miss - std::log(T(1) - pfa); }
+};
+
+/// What one review did.
 struct ReviewStats {
   int expected = 0;        ///< landmarks in the prediction that were in view
   int paired = 0;          ///< of those, paired by the association
   int removed = 0;         ///< landmarks removed (every rule)
-  int removed_missed = 0;  ///< of those, confirmed ones removed by the miss-probability rule
+  int removed_missed = 0;  ///< of those, confirmed ones removed by the evidence (log-odds at delete_nats)
   int removed_moved = 0;   ///< of those, removed by the static-gate rule
   int merged = 0;          ///< landmarks merged into another (node::SlamStep: a loop closure's duplicates)
   int evicted = 0;         ///< landmarks evicted to make room in a full map (node::SlamStep: evict_when_full)
+  int confirmed = 0;       ///< landmarks confirmed by this review
 };
-
 /// Why the current review removes a landmark whatever its counters say.
 enum class Drop : std::uint8_t {
   kNone = 0,
-  kMissed,  ///< the miss-probability rule
+  kMissed,  ///< the evidence: log-odds at or below delete_nats
   kMoved,   ///< the static gate
+};
+
+/// Flags of a landmark record.
+enum LandmarkFlag : std::uint8_t {
+  kConfirmedFlag = 1,  ///< its log-odds reached confirm_nats (for good)
+  kKnownFlag = 2,      ///< known beforehand (a surveyed map): never removed by the evidence
 };
 
 /// One landmark. Members ordered by alignment (scalars, then the id, then the counters), so the
@@ -84,11 +121,11 @@ template <typename T>
 struct LandmarkRecord {
   T l0[2];                 ///< first estimate [m] (world frame): FEJ's linearisation point, the static gate's l0
   T P0[3];                 ///< its covariance when added [m^2]: xx, xy, yy (the static gate's P0)
-  T miss_p;                ///< the miss-probability rule's product over the current streak of misses
+  T exist;                 ///< log-odds that it exists [nats] (LandmarkPolicy), saturating
   FeatureId id;            ///< stable, never reused
   std::uint16_t hits;      ///< reviews paired (saturating at 65535; the first sighting counts)
   std::uint16_t expected;  ///< reviews in view or paired (saturating)
-  std::uint8_t misses;     ///< reviews in view and not paired (saturating at 255)
+  std::uint8_t flags;      ///< LandmarkFlag
   std::uint8_t age;        ///< reviews since added (saturating at 255)
   std::uint8_t unseen;     ///< reviews since it was last paired (saturating at 255): a loop closure's age
   Drop drop;               ///< review scratch: set by count() and the filter's static gate
@@ -130,31 +167,33 @@ class LandmarkBook {
     return lo < n_ && rec_[lo].id == id ? lo : -1;
   }
 
-  /// Appends a landmark first estimated at l with covariance (xx, xy, yy) = P0; tentative, with one
-  /// hit. Precondition: !full().
+  /// Appends a landmark first estimated at l with covariance (xx, xy, yy) = P0: tentative, with one
+  /// hit and log-odds 0; `known` (a surveyed map): confirmed, and never removed by the evidence.
+  /// Precondition: !full().
   /// @return its id
-  FeatureId add(const Vec2<T>& l, const Mat2<T>& P0) {
+  FeatureId add(const Vec2<T>& l, const Mat2<T>& P0, bool known = false) {
     LandmarkRecord<T>& r = rec_[n_];
     r.l0[0] = l.x();
     r.l0[1] = l.y();
     r.P0[0] = P0(0, 0);
     r.P0[1] = P0(0, 1);
     r.P0[2] = P0(1, 1);
-    r.miss_p = T(1);
+    r.exist = T(0);
     r.id = next_id_;
     r.hits = 1;
     r.expected = 1;
-    r.misses = 0;
+    r.flags = known ? static_cast<std::uint8_t>(kConfirmedFlag | kKnownFlag) : std::uint8_t{0};
     r.age = 0;
     r.unseen = 0;
+    r.drop = Drop::kNone;
     ++n_;
     return next_id_++;
   }
 
-  /// Landmark j has been paired confirm_hits times and has lived confirm_min_reviews reviews.
-  bool confirmed(int j, const LandmarkPolicy& policy) const {
-    return rec_[j].hits >= policy.confirm_hits && rec_[j].age >= policy.confirm_min_reviews;
-  }
+  /// Landmark j's log-odds has reached confirm_nats (or it is known).
+  bool confirmed(int j) const { return (rec_[j].flags & kConfirmedFlag) != 0; }
+  /// Landmark j's log-odds of existence [nats].
+  T existence(int j) const { return rec_[j].exist; }
 
   /// Starts a review: no landmark marked for removal, every one a review older.  O(n)
   void start_review() {
@@ -164,58 +203,57 @@ class LandmarkBook {
     }
   }
   /// One review's evidence on landmark j: paired by the association, or expected in view and not
-  /// paired (a miss); with miss_probability set, a confirmed landmark missed too often in a row is
-  /// marked kMissed (LandmarkPolicy).
-  void count(int j, bool in_view, bool paired, const LandmarkPolicy& policy) {
+  /// paired (a miss), with the log-odds increment `evidence` (ExistenceEvidence); the log-odds
+  /// saturates at confirm_nats + reserve_nats, confirms at confirm_nats and marks the landmark kMissed at delete_nats
+  /// unless it is known (LandmarkPolicy).
+  /// @return the landmark was confirmed by this review
+  bool count(int j, bool in_view, bool paired, T evidence, const LandmarkPolicy& policy) {
     LandmarkRecord<T>& r = rec_[j];
-    if ((in_view || paired) && r.expected < 65535) ++r.expected;
+    if (!in_view && !paired) return false;
+    if (r.expected < 65535) ++r.expected;
     if (paired) {
       if (r.hits < 65535) ++r.hits;
-      r.miss_p = T(1);
       r.unseen = 0;
-    } else if (in_view) {
-      if (r.misses < 255) ++r.misses;
-      if (policy.miss_probability > 0.0f) {
-        const T p = (T(r.hits) + T(1)) / (T(r.expected) + T(2));
-        r.miss_p *= T(1) - p;
-        if (r.hits >= policy.confirm_hits && r.miss_p < T(policy.miss_probability)) r.drop = Drop::kMissed;
-      }
     }
+    r.exist = std::min(r.exist + evidence, T(policy.confirm_nats) + T(policy.reserve_nats));
+    if ((r.flags & kKnownFlag) == 0 && r.exist <= T(policy.delete_nats)) r.drop = Drop::kMissed;
+    if ((r.flags & kConfirmedFlag) != 0 || r.exist < T(policy.confirm_nats)) return false;
+    r.flags = static_cast<std::uint8_t>(r.flags | kConfirmedFlag);
+    return true;
   }
-  /// The end of a review: a marked landmark is removed, every one ages, a tentative one is removed after
-  /// max_misses misses or max_tentative_reviews reviews; the others' indices go to keep, increasing.
-  /// Counts the removals in stats.
+  /// The end of a review: a marked landmark is removed, every one ages, one still tentative after
+  /// max_tentative_reviews reviews is removed; the others' indices go to keep, increasing. Counts
+  /// the removals in stats.
   /// @return how many are kept
   int choose_kept(const LandmarkPolicy& policy, std::int16_t (&keep)[MaxLandmarks], ReviewStats& stats) {
     int kept = 0;
     for (int j = 0; j < n_; ++j) {  // <= MaxLandmarks
       LandmarkRecord<T>& r = rec_[j];
       if (r.drop != Drop::kNone) {
-        stats.removed_missed += r.drop == Drop::kMissed;
+        stats.removed_missed += r.drop == Drop::kMissed && confirmed(j);
         stats.removed_moved += r.drop == Drop::kMoved;
         continue;
       }
       if (r.age < 255) ++r.age;
-      if (!confirmed(j, policy)) {
-        if (r.misses >= policy.max_misses || r.age >= policy.max_tentative_reviews) continue;
-      }
+      if (!confirmed(j) && r.age >= policy.max_tentative_reviews) continue;
       keep[kept++] = static_cast<std::int16_t>(j);
     }
     stats.removed = n_ - kept;
     return kept;
   }
   /// Record `into` takes the sightings of record `from` (one landmark mapped twice; the filter
-  /// removes `from` afterwards): hits and expected add (saturating), misses and unseen take the
-  /// smaller, age the larger, the miss streak restarts. `into` keeps its id, first estimate and its P0.
+  /// removes `from` afterwards): hits and expected add (saturating), unseen takes the smaller, age,
+  /// the log-odds and the flags the larger (or: confirmed or known if either is). `into` keeps its
+  /// id, first estimate and its P0.
   void absorb(int into, int from) {
     LandmarkRecord<T>& a = rec_[into];
     const LandmarkRecord<T>& b = rec_[from];
     a.hits = static_cast<std::uint16_t>(std::min(65535, int(a.hits) + int(b.hits)));
     a.expected = static_cast<std::uint16_t>(std::min(65535, int(a.expected) + int(b.expected)));
-    a.misses = std::min(a.misses, b.misses);
+    a.flags = static_cast<std::uint8_t>(a.flags | b.flags);
     a.age = std::max(a.age, b.age);
     a.unseen = std::min(a.unseen, b.unseen);
-    a.miss_p = T(1);
+    a.exist = std::max(a.exist, b.exist);
   }
   /// Keeps the records keep[0 .. kept) (increasing), in that order; the others are removed.
   /// Every source index is at or after its destination, so nothing is overwritten before it is read.

@@ -1,7 +1,8 @@
 // ekf: the map's upkeep, the operations of ekf::Slam that decide which landmarks stay (declared and
 // documented in ekf/slam.hpp, defined here):
-//   review         a scan's evidence counted (hits, misses, the static gate) and the landmarks the
-//                  policy rejects removed (count_evidence, LandmarkBook::choose_kept, move_kept)
+//   review         a scan's evidence counted (hits, misses, the log-odds of existence, the static
+//                  gate) and the landmarks the policy rejects removed, marginalised
+//                  (count_evidence, LandmarkBook::choose_kept, move_kept)
 //   duplicate_d2   how far apart two landmarks are in their own uncertainty
 //   merge          a duplicate fused into the landmark it copies, then removed
 //   evict          the least-seen landmark beyond r + d removed to make room
@@ -20,19 +21,23 @@
 namespace geojcbb::ekf {
 
 template <typename T, class B>
-Status Slam<T, B>::review(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
-                          const LandmarkPolicy& policy, ReviewStats& stats) {
+Status Slam<T, B>::review(const Observations<T, B>& obs, const Prediction<T, B>& pred, const Association<T, B>& assoc,
+                          const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats,
+                          std::uint32_t (*clock)(), std::uint32_t* counted) {
   if (!policy.valid() || !(view.min_range_m >= T(0)) || !(view.max_range_m > view.min_range_m) ||
       !(view.half_fov_rad > T(0)) || !std::isfinite(view.max_range_m) || !std::isfinite(view.half_fov_rad) ||
       !(view.occlusion_rad >= T(0)) || !std::isfinite(view.occlusion_rad)) {
     return Status::kInvalidInput;
   }
-  if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations) {
+  if (pred.count < 0 || pred.count > B::kMaxCandidates || assoc.count < 0 || assoc.count > B::kMaxObservations ||
+      obs.count != assoc.count) {
     return Status::kInvalidInput;
   }
-  count_evidence(pred, assoc, view, policy, stats);
+  const std::uint32_t t0 = clock ? clock() : 0;
+  count_evidence(obs, pred, assoc, view, policy, stats);
   std::int16_t keep[B::kMaxLandmarks];
   const int kept = book_.choose_kept(policy, keep, stats);
+  if (counted != nullptr) *counted = clock ? clock() - t0 : 0;
   if (kept == landmarks()) return Status::kOk;
   move_kept(keep, kept);
   book_.retain(keep, kept);
@@ -142,19 +147,30 @@ inline bool Slam<T, B>::moved(int j, T gate_d2) const {
 }
 
 template <typename T, class B>
-void Slam<T, B>::count_evidence(const Prediction<T, B>& pred, const Association<T, B>& assoc, const Visibility<T>& view,
-                                const LandmarkPolicy& policy, ReviewStats& stats) {
+void Slam<T, B>::count_evidence(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                const Association<T, B>& assoc, const Visibility<T>& view, const LandmarkPolicy& policy,
+                                ReviewStats& stats) {
   stats = ReviewStats{};
   book_.start_review();
+  const ExistenceEvidence<T> ev(policy);
+  const Mat2<T> R_miss = obs.count > 0 ? obs.R[0] : Mat2<T>::Zero();
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     const int j = index_of(pred.id[a]);
     if (j < 0) continue;  // not in this map
-    bool paired = false;
-    for (int i = 0; i < assoc.count && !paired; ++i) paired = assoc.feature[i] == pred.id[a];  // <= kMaxObservations
+    int i = 0;
+    while (i < assoc.count && assoc.feature[i] != pred.id[a]) ++i;  // <= kMaxObservations
+    const bool paired = i < assoc.count;
     const bool seen = ekf::in_view(pred, a, view);
     stats.expected += seen;
     stats.paired += paired;
-    book_.count(j, seen, paired, policy);
+    T e = T(0);
+    if (paired || seen) {
+      const Mat2<T> S = pred.C.block(a, a) + (paired ? obs.R[i] : R_miss);
+      const T r = pred.h[a].x();
+      const T pfa = ev.pfa(r * r * (S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0)));
+      e = paired ? ev.hit(pfa) : ev.miss(pfa);
+    }
+    stats.confirmed += book_.count(j, seen, paired, e, policy);
     if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
   }
 }

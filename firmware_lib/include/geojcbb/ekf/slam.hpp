@@ -17,8 +17,10 @@
 //   augment / add_known_landmark: a new landmark from the inverse model, or a known one       O(n)
 //   review, duplicate_d2, merge, evict: the map's upkeep (ekf/map_upkeep.hpp): landmark
 //                   bookkeeping (the book's rules, LandmarkPolicy, and the static gate on x and P):
-//                   a new landmark is tentative until it is paired again; one that is expected in
-//                   view and missed too often is removed, x and P compacted; a duplicate merged;
+//                   each landmark's log-odds of existence grows with pairings and falls with misses
+//                   in view; a new one is tentative until it passes the confirm threshold, and any
+//                   one at the delete threshold is removed (marginalised: x and P compacted, which
+//                   is exact for an EKF); a duplicate merged;
 //                   the least-seen landmark beyond r + d evicted from a full map            O(n^2)
 // First-estimates Jacobians (Huang, Mourikis, Roumeliotis, ICRA 2008; FilterOptions): the
 // measurement Jacobians use each landmark's first estimate, and the first prediction after an
@@ -272,8 +274,10 @@ class Slam {
   /// Landmark j fails the static gate (LandmarkPolicy::static_gate_d2 = gate_d2): the review
   /// will remove it as moved if it is paired.
   bool has_moved(int j, T gate_d2) const { return gate_d2 > T(0) && moved(j, gate_d2); }
-  /// Landmark j is confirmed under `policy` (LandmarkBook::confirmed: hits and age).
-  bool confirmed(int j, const LandmarkPolicy& policy) const { return book_.confirmed(j, policy); }
+  /// Landmark j's log-odds of existence has reached the confirm threshold (LandmarkPolicy), or it is known.
+  bool confirmed(int j) const { return book_.confirmed(j); }
+  /// Landmark j's log-odds of existence [nats] (LandmarkPolicy).
+  T existence(int j) const { return book_.existence(j); }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   int index_of(FeatureId id) const { return book_.index_of(id); }
   int dim() const { return Layout::landmark(landmarks()); }
@@ -372,12 +376,12 @@ class Slam {
  public:
   /// The association input for the current scan: the landmarks with predicted range < radius_m
   /// (r + d, eq. 5), nearest first and at most MaxCandidates, with their stable ids, predicted
-  /// measurements h and C = H P H^T. With `confirmed_first` (a policy), the confirmed landmarks
+  /// measurements h and C = H P H^T. With `confirmed_first`, the confirmed landmarks
   /// come first (each part nearest first): the first `stats.confirmed` candidates are a prediction
   /// of their own (C's leading blocks), the ones after them tentative.
   /// @return kOk; kInvalidInput for a radius that is not positive and finite.
   [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out, LocalMapStats& stats,
-                                     const LandmarkPolicy* confirmed_first = nullptr) const {
+                                     bool confirmed_first = false) const {
     if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
     auto& idx = ws.cand;
     auto& rng = ws.cand_range;
@@ -406,11 +410,11 @@ class Slam {
       idx[k] = static_cast<std::uint16_t>(j);
     }
     stats.confirmed = n;
-    if (confirmed_first != nullptr) {  // stable partition, the confirmed first
+    if (confirmed_first) {  // stable partition, the confirmed first
       std::uint16_t tentative[B::kMaxCandidates];
       int c = 0, t = 0;
       for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-        if (book_.confirmed(idx[a], *confirmed_first)) {
+        if (book_.confirmed(idx[a])) {
           idx[c++] = idx[a];
         } else {
           tentative[t++] = idx[a];
@@ -668,7 +672,7 @@ class Slam {
   }
 
   /// Adds a landmark observed at z = (range, bearing) with noise R from the current pose.
-  /// The landmark starts tentative with one hit (see LandmarkPolicy).
+  /// The landmark starts tentative with one hit and log-odds 0 (see LandmarkPolicy).
   /// @param[out] id  the new landmark's id (stable for the map's life; never reused)
   /// @return kOk; kCapacityExceeded when MaxLandmarks are mapped or the ids are used up; kNonFinite
   ///         (also when the new landmark's mean or covariance would overflow); kInvalidInput for a
@@ -698,7 +702,8 @@ class Slam {
   }
 
   /// Adds a landmark known beforehand (a surveyed map, localisation only): at l with covariance Pll,
-  /// uncorrelated with the rest of the state. It starts with one hit, as augment()'s do.
+  /// uncorrelated with the rest of the state. It starts with one hit, confirmed, and the evidence
+  /// never removes it (LandmarkPolicy).
   /// @param[out] id  the new landmark's id
   /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll; kCapacityExceeded. No state changes
   ///         unless kOk.
@@ -708,22 +713,36 @@ class Slam {
     if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;  // as augment()
     if (book_.full()) return Status::kCapacityExceeded;
     P_.append_uncorrelated(dim(), Pll_sym);
-    id = add_landmark(l);
+    id = add_landmark(l, true);
     return Status::kOk;
   }
 
   /// Landmark bookkeeping after a scan's update and augment: every landmark of `pred` (this scan's
-  /// prediction) whose predicted measurement is in `view` was expected; paired by `assoc`, it
-  /// gains a hit, otherwise a miss. Tentative landmarks with policy.max_misses misses, or older
-  /// than policy.max_tentative_reviews reviews, are removed (state and covariance compacted; the
-  /// other ids are unchanged).
+  /// prediction) whose predicted measurement is in `view` was expected; paired by `assoc` (with
+  /// observation i of `obs`), it gains a hit, otherwise a miss, and its log-odds of existence the
+  /// evidence of either (LandmarkPolicy, ExistenceEvidence; S = C_jj + R, R the paired
+  /// observation's, for a miss the scan's first observation's, none in an empty scan). A landmark
+  /// at the delete threshold, or tentative for max_tentative_reviews reviews, is removed: its rows
+  /// and columns dropped from x and P (marginalised; the other ids are unchanged).
+  /// `clock` (nullptr: none) times the evidence alone, without the removals, into *counted.
   /// @return kOk; kInvalidInput for a bad policy or view, or counts out of range. No state changes
   ///         unless kOk.
   /// Out of line: its keep[] (2 bytes a landmark) inlined into the caller's frame took
   /// node::SlamStep::step past 512 B at the large bounds.
-  [[nodiscard, gnu::noinline]] Status review(const Prediction<T, B>& pred, const Association<T, B>& assoc,
-                                             const Visibility<T>& view, const LandmarkPolicy& policy,
-                                             ReviewStats& stats);
+  [[nodiscard, gnu::noinline]] Status review(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                             const Association<T, B>& assoc, const Visibility<T>& view,
+                                             const LandmarkPolicy& policy, ReviewStats& stats,
+                                             std::uint32_t (*clock)() = nullptr, std::uint32_t* counted = nullptr);
+
+  /// Removes the landmark with this id, which the caller knows is not one (a mover): its rows and
+  /// columns dropped (marginalised), every other id unchanged.
+  /// @return kOk; kInvalidInput when no landmark has this id (then nothing changes).  O(n^2)
+  [[nodiscard]] Status forget(FeatureId id) {
+    const int j = index_of(id);
+    if (j < 0) return Status::kInvalidInput;
+    remove(j);
+    return Status::kOk;
+  }
 
   /// How far apart landmarks a and b (indices) are, in their own uncertainty: d = l_a - l_b, its
   /// covariance P_aa + P_bb - P_ab - P_ba (their correlation counts: two estimates of one landmark
@@ -757,21 +776,22 @@ class Slam {
   /// by kStaticFloor_m2 against a near-singular gain. Whether its d2 exceeds gate_d2.
   bool moved(int j, T gate_d2) const;
   /// review()'s first half: every landmark of pred gains a hit, a miss or nothing (out of view),
-  /// and the static gate marks the ones that moved. Out of line so review()'s frame (which holds
+  /// its log-odds of existence the evidence of it, and the static gate marks the ones that moved. Out of line so review()'s frame (which holds
   /// keep) stays within the 512-byte budget at the large bounds.
-  [[gnu::noinline]] void count_evidence(const Prediction<T, B>& pred, const Association<T, B>& assoc,
-                                        const Visibility<T>& view, const LandmarkPolicy& policy, ReviewStats& stats);
+  [[gnu::noinline]] void count_evidence(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                        const Association<T, B>& assoc, const Visibility<T>& view,
+                                        const LandmarkPolicy& policy, ReviewStats& stats);
   /// review()'s compaction of x and P: landmark keep[k] (increasing) becomes landmark k. Every
   /// source index is at or after its destination, so nothing is overwritten before it is read.
   /// Out of line so review()'s frame (which holds keep) stays within the 512-byte budget.
   [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept);
   /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
   /// record. @return its id
-  FeatureId add_landmark(const Vec2<T>& l) {
+  FeatureId add_landmark(const Vec2<T>& l, bool known = false) {
     const int k = dim();
     x_[k] = l.x();
     x_[k + 1] = l.y();
-    return book_.add(l, P_.template block<2, 2>(k, k));
+    return book_.add(l, P_.template block<2, 2>(k, k), known);
   }
   /// A pose and its covariance fit to start from: finite, P symmetric positive definite.
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.

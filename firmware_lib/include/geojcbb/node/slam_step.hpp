@@ -10,7 +10,8 @@
 // decided; the step applies it to the filter.
 // Augmentation rule: an observation left kNewFeature becomes a landmark only if its nearest d2
 // also exceeds a second gate (chi-square level `new_landmark_level`, 2 dof); between the gates it
-// is dropped. review() then keeps clutter out of the map (tentative landmarks, ekf/landmark_book.hpp).
+// is dropped. review() then keeps clutter out of the map (each landmark's log-odds of existence,
+// ekf/landmark_book.hpp).
 // No heap: the object holds the filter and every workspace, sized by the Bounds; typically static
 // on the device. Every call validates first and changes no state unless it returns kOk.
 #pragma once
@@ -62,10 +63,16 @@ class SlamStep {
       st = chi2_inv(s.static_gate_level, 2, static_gate);
       if (st != Status::kOk) return st;
     }
+    double individual = 0;  // the association's individual gate: the area of a landmark's p_FA
+    st = chi2_inv(s.confidence, 2, individual);
+    if (st != Status::kOk) return st;
     // The stages' option structs from the table (bind_options: generated, type-checked).
     ekf::LandmarkPolicy policy;
     ekf::bind_options(s, policy);
     policy.static_gate_d2 = static_cast<float>(static_gate);
+    policy.gate_d2 = static_cast<float>(individual);
+    policy.p_detect = static_cast<float>(s.loop_detection_probability);
+    policy.clutter_density = static_cast<float>(s.loop_unexplained_density);
     if (!policy.valid()) return Status::kInvalidInput;
     reloc::AlignOptions<T> align;
     reloc::bind_options(s, align);
@@ -155,7 +162,7 @@ class SlamStep {
       return Status::kOk;
     }
     ekf::LocalMapStats local;
-    st = slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local, cfg_.tentative_isolated ? &policy_ : nullptr);
+    st = slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local, cfg_.tentative_isolated);
     if (st != Status::kOk) return st;
     const int confirmed = local.confirmed;
     const std::uint32_t t1 = clock ? clock() : 0;
@@ -367,7 +374,13 @@ class SlamStep {
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above. A scan the hypothesis
     // window holds is no evidence: its landmarks were not paired because the pose is in doubt.
-    if (!hold && slam_.review(pred_, assoc_, view_, policy_, rs) != Status::kOk) rs = ekf::ReviewStats{};
+    std::uint32_t existence = 0;
+    if (!hold && slam_.review(obs, pred_, assoc_, view_, policy_, rs, clock, &existence) != Status::kOk) {
+      rs = ekf::ReviewStats{};
+    }
+    for (int k = 0; k < (cfg_.tentative_isolated ? tentative_.jumped() : 0); ++k) {  // <= kMaxMovers
+      rs.removed_moved += slam_.forget(tentative_.jumped(k)) == Status::kOk;         // a mover's landmark
+    }
     if (merge_.due()) rs.merged = merge_.merge(cfg_, pred_, assoc_, slam_, ekf_ws_);
     const std::uint32_t t4 = clock ? clock() : 0;
     out.diag = assoc_.diag;
@@ -376,6 +389,7 @@ class SlamStep {
     out.counts = StageCounts{};
     out.counts.update = t3 - t2;
     out.counts.augment_review = t4 - t3;
+    out.counts.existence = existence;
     return Status::kOk;
   }
 

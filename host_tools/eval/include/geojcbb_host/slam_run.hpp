@@ -47,7 +47,7 @@ struct RunOptions {
 
 /// The step's settings of a run with this sensor: opt.step with r + d = max range + compensation,
 /// the view from the sensor's limits less the margin (and the FOV less 3 bearing sigma), and in
-/// known-map mode augmentation off with every landmark rule at its default but confirm_hits = 1.
+/// known-map mode augmentation off and the static gate at its default (off): known landmarks stay.
 StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sensor);
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").

@@ -184,10 +184,10 @@ struct Config : Codec<Config> {
   float sensor_x_m = 0.0f;                  ///< the sensor's mount on the robot: ahead [-100, 100]
   float sensor_y_m = 0.0f;                  ///< to the left [-100, 100]
   float sensor_theta_rad = 0.0f;            ///< its heading [-pi, pi]
-  std::uint8_t confirm_hits = 2;            ///< hits that confirm a tentative landmark, >= 1
-  std::uint8_t max_misses = 2;              ///< misses in view that remove a tentative landmark, >= 1
+  float landmark_confirm_nats = 4.6f;       ///< log-odds of existence that confirms, (0, 1e6)
+  float landmark_delete_nats = -4.0f;       ///< log-odds at or below which a landmark goes, (-1e6, 0)
+  float landmark_reserve_nats = 4.6f;       ///< log-odds it can hold beyond confirmation, >= 0
   std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
-  std::uint8_t confirm_min_reviews = 0;     ///< reviews a landmark must have lived to be confirmed
   bool tentative_isolated = false;          ///< tentative landmarks paired apart, updating only themselves
   bool joint_recheck = true;
   float ambiguity_margin = 0.0f;  ///< [0, 1e6) (0: off)
@@ -202,7 +202,6 @@ struct Config : Codec<Config> {
   std::uint8_t rjc_tries = 8;      ///< 1 .. 64
   std::uint8_t rjc_subset = 8;     ///< >= 1
   float occlusion_rad = 0.0f;      ///< [0, pi]
-  float miss_probability = 0.0f;   ///< [0, 1)
   float static_gate_level = 0.0f;  ///< [0, 1)
   bool first_estimates_jacobians = true;
   bool augment = true;
@@ -255,13 +254,14 @@ struct Config : Codec<Config> {
         field("sensor_y_m", &Config::sensor_y_m, range::interval(-100.0f, 100.0f, false, false), "m", "to the left"),
         field("sensor_theta_rad", &Config::sensor_theta_rad, range::interval(-kPiF, kPiF, false, false), "rad",
               "its heading on the robot"),
-        field("confirm_hits", &Config::confirm_hits, range::at_least(1), "", "hits that confirm a tentative landmark"),
-        field("max_misses", &Config::max_misses, range::at_least(1), "",
-              "misses in view that remove a tentative landmark"),
+        field("landmark_confirm_nats", &Config::landmark_confirm_nats, range::interval(0.0f, 1e6f, true, true), "nats",
+              "log-odds of existence that confirms a landmark"),
+        field("landmark_delete_nats", &Config::landmark_delete_nats, range::interval(-1e6f, 0.0f, true, true), "nats",
+              "log-odds of existence at or below which a landmark is removed"),
+        field("landmark_reserve_nats", &Config::landmark_reserve_nats, range::not_below(0.0f), "nats",
+              "log-odds a landmark can hold beyond `landmark_confirm_nats`"),
         field("max_tentative_reviews", &Config::max_tentative_reviews, range::at_least(1), "",
               "reviews a landmark may stay tentative"),
-        field("confirm_min_reviews", &Config::confirm_min_reviews, range::any(), "scans",
-              "reviews a landmark must have lived to be confirmed"),
         field("tentative_isolated", &Config::tentative_isolated, range::one_of(0, 1), "",
               "tentative landmarks paired apart, updating only themselves"),
         field("joint_recheck", &Config::joint_recheck, range::one_of(0, 1)),
@@ -276,7 +276,6 @@ struct Config : Codec<Config> {
         field("rjc", &Config::rjc, range::one_of(0, 1)), field("rjc_tries", &Config::rjc_tries, range::between(1, 64)),
         field("rjc_subset", &Config::rjc_subset, range::at_least(1), "", "the device checks ≤ its `max_observations`"),
         field("occlusion_rad", &Config::occlusion_rad, range::interval(0.0f, kPiF, false, false), "rad", "0: off"),
-        field("miss_probability", &Config::miss_probability, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
         field("static_gate_level", &Config::static_gate_level, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
         field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
               "applied at the next RESET"),
@@ -746,9 +745,9 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 142 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 147 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 92 &&
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
                   AssocResult::kItemSize == 9,
               "payload sizes of version 1 (docs/protocol.md)");

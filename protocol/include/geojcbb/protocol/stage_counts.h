@@ -14,6 +14,7 @@
   X(associate, "the association") \
   X(update, "the filter's update") \
   X(augment_review, "new landmarks and the map's review") \
+  X(existence, "the landmarks' existence update (log-odds of detections and misses), inside augment_review") \
   X(relocalise, "the relocaliser's alignment: 0 unless the robot was lost") \
   X(loop, "the loop-closure check: 0 when it did not run") \
   X(window, "clusters first and the hypothesis window: 0 when they did not run") \

@@ -106,7 +106,7 @@ class ClustersFirst {
         if (k >= 0) {
           regrouped += j != scratch.slot_at(k);
           pair(assoc, pred, i, map.id(scratch.slot_at(k)), ws.pick_d2[i]);
-        } else if (map.supported(j)) {
+        } else if (map.confirmed(j)) {
           unpair(assoc, i);
           ++regrouped;
         }

@@ -1,7 +1,7 @@
 // node/stages: a loop closure's duplicates merged (StepSettings::loop_merge_d2 > 0). Its state across
 // scans: the last closure's old landmarks (ids, with the age a duplicate of each may have) and the
 // reviews left after which merge() runs.
-//   note()   before the review: a scan that pairs old landmarks (supported, unpaired for loop_age
+//   note()   before the review: a scan that pairs old landmarks (confirmed, unpaired for loop_age
 //            reviews) is a closure; its old landmarks become the closure set
 //   merge()  after the review, on that scan and the next kLoopSettleScans - 1: the closest landmark
 //            of the region added while an old one was unseen, within loop_merge_d2 of it in
@@ -38,7 +38,7 @@ class DuplicateMerge {
     int n = 0;
     for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
       const int k = map.slot_of(assoc.feature[i]);
-      if (k < 0 || map.unseen(k) < cfg.loop_age || !map.supported(k)) continue;
+      if (k < 0 || map.unseen(k) < cfg.loop_age || !map.confirmed(k)) continue;
       id_[static_cast<std::size_t>(n)] = assoc.feature[i];
       limit_[static_cast<std::size_t>(n)] = static_cast<std::int16_t>(map.unseen(k) + 1);
       ++n;

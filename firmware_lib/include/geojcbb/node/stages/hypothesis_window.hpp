@@ -195,7 +195,7 @@ class HypothesisWindow {
       for (int h = 1; h < count_ && agreed; ++h) {  // <= kMaxHypotheses
         agreed = pick_[static_cast<std::size_t>(h)][static_cast<std::size_t>(i)] == k;
       }
-      if (agreed && k < 0 && !map.supported(map.slot_of(assoc.feature[i]))) {
+      if (agreed && k < 0 && !map.confirmed(map.slot_of(assoc.feature[i]))) {
         // No hypothesis pairs it with the frozen map: the association's answer (new, or a
         // tentative landmark) stands.
         continue;

@@ -1,7 +1,7 @@
 // node/stages: the loop check (StepSettings::loop_check, reloc/loop.hpp). Its state across scans: the
 // pending closure (wins in a row and its correction) and the agreeing checks in a row.
 //   run()  after the association, while tracking: a scan whose local region holds old landmarks
-//          (supported, unseen for loop_age reviews) has its closure checked against an alignment
+//          (confirmed, unseen for loop_age reviews) has its closure checked against an alignment
 //          over them with the filter's pose as the prior; three hypotheses (no closure, the
 //          association's, the alignment's) by their log posteriors: the association is left as it
 //          is, has its disputed pairs held, or a Closure (the alignment's pairs, or the association's
@@ -61,7 +61,7 @@ class LoopCheck {
     const PriorScope pose_free_on_return{opt};
     ls = reloc::LoopStats<T>{};
     close.commit = false;
-    auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.supported(k) && map.id(k) >= surveyed_end_; };
+    auto old = [&](int k) { return map.unseen(k) >= cfg.loop_age && map.confirmed(k) && map.id(k) >= surveyed_end_; };
     int in_region = 0;
     for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
       const int k = map.slot_of(pred.id[a]);

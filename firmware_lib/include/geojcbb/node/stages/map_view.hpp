@@ -45,10 +45,9 @@ class MapView {
   int expected(int k) const { return slam_->expected(k); }
   int unseen(int k) const { return slam_->unseen(k); }
   int age(int k) const { return slam_->age(k); }
-  /// Paired confirm_hits times at least: the map the window, the clusters and the alignments use.
-  bool supported(int k) const { return k >= 0 && slam_->hits(k) >= policy_->confirm_hits; }
-  /// Confirmed under the step's policy (hits and age, ekf::LandmarkBook::confirmed).
-  bool confirmed(int k) const { return slam_->confirmed(k, *policy_); }
+  /// Confirmed by its log-odds of existence (ekf::LandmarkPolicy), or known: the map the lost
+  /// test, the window, the clusters and the alignments use. False for slot -1.
+  bool confirmed(int k) const { return k >= 0 && slam_->confirmed(k); }
   /// Fails the static gate: the review removes it as moved if it is paired.
   bool moved(int k) const { return slam_->has_moved(k, T(policy_->static_gate_d2)); }
   const ekf::LandmarkPolicy& policy() const { return *policy_; }

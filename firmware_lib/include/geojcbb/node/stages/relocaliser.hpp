@@ -1,7 +1,7 @@
 // node/stages: the relocaliser (StepSettings::relocalise). Its state across scans: tracking, lost or
 // confirming, the scans left to confirm, the doubt (the lost test's CUSUM), the pose covariance when lost.
 //   localise()  before the association: lost (told: SlamStep::lost, RELOCALISE) -> the scan aligned
-//               against the supported landmarks (reloc::align) with the filter's pose as the prior,
+//               against the confirmed landmarks (reloc::align) with the filter's pose as the prior,
 //               unless its position spread is wider than the map (then pose-free); doubted (the lost
 //               test below) -> the scan aligned pose-free while it is still tracked: an accepted pose
 //               within the filter's prior clears the doubt, one beyond it is a kidnap. An accepted
@@ -59,13 +59,13 @@ struct Relocation {
 
 /// The lost test's evidence of one tracked scan [nats]: log p(scan | the tracked pose is right) -
 /// log p(scan | it is wrong), from the step's association at the tracked pose (its prediction):
-///   sum over pairs with supported landmarks  log p_j - d2/2 - log|2 pi S|/2 - log(density r_i)
-///   + (supported landmarks in view, not paired)  log(1 - p_j)
+///   sum over pairs with confirmed landmarks  log p_j - d2/2 - log|2 pi S|/2 - log(density r_i)
+///   + (confirmed landmarks in view, not paired)  log(1 - p_j)
 /// p_j = min(p_D, (hits + 1) / (expected + 2)): the landmark's own detection rate (a landmark often
 /// missed where it should be seen, occluded or spurious, is little evidence either way).
 /// S = C_jj + R_i (range, bearing); density r_i: the unexplained density per m^2 in (range, bearing)
 /// at the observation's range. Pose wrong: every observation is unexplained (observations the map
-/// does not explain cancel) and the landmarks the map puts in view are not there. Only supported
+/// does not explain cancel) and the landmarks the map puts in view are not there. Only confirmed
 /// landmarks with an id below `before` are evidence: tentative ones, and those mapped since the pose
 /// came into doubt, were made at the tracked pose and follow it. Bound: m n (+ n^2 occlusion).
 template <typename T, class B>
@@ -76,7 +76,7 @@ template <typename T, class B>
   T e = T(0);
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     const int k = map.slot_of(pred.id[a]);
-    if (pred.id[a] >= before || !map.supported(k)) continue;
+    if (pred.id[a] >= before || !map.confirmed(k)) continue;
     const T p = std::min(model.p_detect, (T(map.hits(k)) + T(1)) / (T(map.expected(k)) + T(2)));
     int i = 0;
     while (i < assoc.count && assoc.feature[i] != pred.id[a]) ++i;  // <= kMaxObservations
@@ -116,7 +116,7 @@ class Relocaliser {
   /// scan, or before the pose came into doubt (localise() keeps it).
   FeatureId evidence_before() const { return doubt_from_; }
 
-  /// Before the association. When lost, the scan is aligned against the supported landmarks
+  /// Before the association. When lost, the scan is aligned against the confirmed landmarks
   /// (scratch.result); an accepted pose is then fit() for the step to apply, which calls relocalised().
   /// @return kOk; the statuses of AlignWorkspace::push_landmark and reloc::align (nothing changes).
   /// `align` gets the scan's prior (reloc::set_prior; none when the position spread is wider than
@@ -135,7 +135,7 @@ class Relocaliser {
     Vec2<T> lo(std::numeric_limits<T>::infinity(), std::numeric_limits<T>::infinity()), hi = -lo;
     for (int k = 0; k < map.size(); ++k) {  // <= kMaxLandmarks
       // Doubted: the landmarks mapped since the doubt began follow the doubted pose, and are left out.
-      if (!map.supported(k) || (doubted && map.id(k) >= doubt_from_)) continue;
+      if (!map.confirmed(k) || (doubted && map.id(k) >= doubt_from_)) continue;
       const Status st = scratch.push(map, k);
       if (st != Status::kOk) return st;
       lo = lo.cwiseMin(map.mean(k));

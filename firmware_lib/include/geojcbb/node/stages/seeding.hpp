@@ -1,6 +1,6 @@
 // node/stages: the pose hypotheses of one scan, shared by the hypothesis window and clusters-first
 // (reloc/window.hpp, docs/hypotheses.md).
-//   load_frozen()        the frozen map: the region's supported landmarks, their own covariances
+//   load_frozen()        the frozen map: the region's confirmed landmarks, their own covariances
 //   association_picks()  the association's pairs with the frozen map, as picks
 //   Seeds::score()       the association's pairs and one per anchor choice (an ambiguous observation
 //                        and one of its nearest compatible landmarks), each grown by nearest neighbour
@@ -16,14 +16,14 @@
 
 namespace geojcbb::node {
 
-/// The frozen map into scratch: the prediction's supported landmarks.
+/// The frozen map into scratch: the prediction's confirmed landmarks.
 /// @return kOk; the statuses of AlignWorkspace::push_landmark.
 template <typename T, class B>
 [[nodiscard]] Status load_frozen(const Prediction<T, B>& pred, const MapView<T, B>& map, AlignScratch<T, B>& scratch) {
   scratch.clear();
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     const int k = map.slot_of(pred.id[a]);
-    if (!map.supported(k)) continue;
+    if (!map.confirmed(k)) continue;
     const Status st = scratch.push(map, k);
     if (st != Status::kOk) return st;
   }

@@ -3,7 +3,7 @@
 // the movers caught since reset.
 //   pair()       after associate() over the confirmed candidates: the observations it made new are
 //                offered to the tentative candidates (smallest d2 first, one each); a tentative
-//                landmark that jumped is a mover
+//                landmark that jumped is a mover, and its landmark is removed after the review
 //   follow()     after pair(): an observation at a remembered mover is that mover
 //   set_aside()  before the update: the pairs with a tentative landmark move only it (round kAlone)
 //   catch_movers() before the review: a paired landmark that fails the static gate is a mover
@@ -37,8 +37,12 @@ class Tentative {
   void reset() {
     count_ = 0;
     caught_ = 0;
+    jumped_count_ = 0;
   }
   std::uint32_t caught() const { return caught_; }
+  /// The tentative landmarks that jumped on this scan (pair()): movers, for the step to remove.
+  int jumped() const { return jumped_count_; }
+  FeatureId jumped(int k) const { return jumped_[static_cast<std::size_t>(k)]; }
   int movers() const { return count_; }
 
   /// After associate() over the first `confirmed` candidates of pred. `augment_d2`: the
@@ -78,8 +82,10 @@ class Tentative {
       node::pair(out, pred, bi, pred.id[ba], best);
     }
     // A tentative landmark paired on the last scan whose nearest sighting now falls outside the
-    // pairing gate but inside the augmentation gate has jumped: a mover (the sighting is it).
+    // pairing gate but inside the augmentation gate has jumped: a mover (the sighting is it), and
+    // its landmark is not one.
     const Pose2<T> x = map.pose();
+    jumped_count_ = 0;
     for (int a = confirmed; a < pred.count; ++a) {  // <= kMaxCandidates
       const int k = map.slot_of(pred.id[a]);
       if (taken[a] || k < 0 || map.unseen(k) != 0) continue;
@@ -96,6 +102,7 @@ class Tentative {
       if (bi < 0 || !(best > cfg.gate.individual) || !(best <= augment_d2)) continue;
       unpair(out, bi);
       remember(inverse_observe(x, map.mount(), obs.z[bi]));
+      if (jumped_count_ < kMaxMovers) jumped_[static_cast<std::size_t>(jumped_count_++)] = pred.id[a];
     }
   }
 
@@ -183,6 +190,8 @@ class Tentative {
   std::array<Mover, kMaxMovers> movers_{};
   int count_ = 0;
   std::uint32_t caught_ = 0;  ///< since reset()
+  std::array<FeatureId, kMaxMovers> jumped_{};
+  int jumped_count_ = 0;
 };
 
 }  // namespace geojcbb::node
