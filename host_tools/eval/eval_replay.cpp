@@ -390,6 +390,7 @@ Subcommand add_replay_command(CLI::App& app) {
             if (*mrclam_rules) {
               const RunOptions m = mrclam_run_defaults();
               if (rp->count("--static-gate-level") == 0) o->run.step.static_gate_level = m.step.static_gate_level;
+              if (rp->count("--reserve-nats") == 0) o->run.step.landmark_reserve_nats = m.step.landmark_reserve_nats;
               if (rp->count("--new-if-taken") == 0)
                 o->run.step.new_if_candidates_taken = m.step.new_if_candidates_taken;
               if (rp->count("--occlusion") == 0) o->run.step.occlusion_rad = m.step.occlusion_rad;

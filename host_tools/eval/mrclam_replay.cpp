@@ -144,6 +144,7 @@ RunResult replay_robot(const mrclam::Dataset& ds, const mrclam::RobotLog& log, c
 RunOptions mrclam_run_defaults() {
   RunOptions o;
   o.step.static_gate_level = 0.95;
+  o.step.landmark_reserve_nats = 4.6f;  // a confirmed landmark missed six times in a row goes (movers)
   o.step.new_if_candidates_taken = true;
   o.step.occlusion_rad = 0.03;
   return o;

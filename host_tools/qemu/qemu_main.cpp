@@ -34,6 +34,7 @@ struct Budget {
   std::vector<std::uint32_t> window;       ///< clusters first and the hypothesis window, of the scans that ran them
   std::vector<std::uint32_t> lost_test;    ///< the lost test, per scan (0: not run)
   std::vector<std::uint32_t> score;        ///< the posterior scoring (inside the rows above), per scan
+  std::vector<std::uint32_t> existence;    ///< the landmarks' existence update (inside augment_review), per scan
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
 };
@@ -76,6 +77,7 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       if (st.instr_window > 0) b.window.push_back(st.instr_window);
       b.lost_test.push_back(st.instr_lost_test);
       b.score.push_back(st.instr_score);
+      b.existence.push_back(st.instr_existence);
       b.observations.push_back(batch.count);
       if (batch.count >= 20) b.associate20.push_back(st.instr_associate);
       if (b.started && st.budget_hits > b.hits_before) b.budget_hit.push_back(st.instr_associate);
@@ -217,7 +219,7 @@ int run(int argc, char** argv) {
     if (!budget_csv.empty()) {
       csv.open(budget_csv);
       csv << "scenario,strategy,scan,observations,instr_associate,instr_step,instr_predict_local,instr_update,"
-             "instr_augment_review,instr_lost_test,instr_score\n";
+             "instr_augment_review,instr_lost_test,instr_score,instr_existence\n";
     }
     for (const Method& m : strategies) {
       RunOptions ro = o;
@@ -241,7 +243,7 @@ int run(int argc, char** argv) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
           csv << '"' << sc.name << "\"," << m.name() << ',' << i << ',' << b.observations[i] << ',' << b.associate[i]
               << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ',' << b.augment_review[i]
-              << ',' << b.lost_test[i] << ',' << b.score[i] << '\n';
+              << ',' << b.lost_test[i] << ',' << b.score[i] << ',' << b.existence[i] << '\n';
         }
       }
       budgets.push_back(std::move(b));
@@ -271,6 +273,7 @@ int run(int argc, char** argv) {
         line(b.window, "ran clusters first or the hypothesis window");
         line(b.lost_test, "ran the lost test (tracking)");
         line(b.score, "scored candidate poses by their set likelihood (inside the rows above)");
+        line(b.existence, "updated the landmarks' existence (log-odds; inside augment_review)");
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];

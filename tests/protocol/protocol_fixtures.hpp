@@ -210,6 +210,7 @@ inline Stats sample<Stats>() {
   s.instr_associate = 250000;
   s.instr_update = 90000;
   s.instr_augment_review = 15000;
+  s.instr_existence = 6000;
   s.instr_relocalise = 250000;
   s.instr_loop = 120000;
   s.instr_window = 40000;

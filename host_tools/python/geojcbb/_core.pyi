@@ -67,7 +67,7 @@ class Options(TypedDict, total=False):
     sensor_theta_rad: float  # default 0
     landmark_confirm_nats: float  # default 4.6
     landmark_delete_nats: float  # default -4
-    landmark_reserve_nats: float  # default 4.6
+    landmark_reserve_nats: float  # default 1000
     max_tentative_reviews: int  # default 10
     tentative_isolated: bool  # default 0
     joint_recheck: bool  # default 1

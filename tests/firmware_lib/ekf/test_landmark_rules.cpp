@@ -92,7 +92,8 @@ TEST_CASE_TEMPLATE("existence: gone is removed after the misses its log-odds all
     REQUIRE(r->slam.augment(Vec2<T>(T(4), T(0)), R, id) == Status::kOk);
     REQUIRE(r->slam.augment(Vec2<T>(T(5), T(0.3)), R, other) == Status::kOk);
     REQUIRE(r->slam.add_known_landmark(Vec2<T>(T(6), T(-1)), Mat2<T>::Identity() * T(1e-4), known) == Status::kOk);
-    const LandmarkPolicy policy;
+    LandmarkPolicy policy;
+    policy.reserve_nats = 4.6f;  // MRCLAM's rules (the default, 1000, keeps a confirmed landmark)
     const Vec2<T> z(T(4), T(0));
     // The landmark never paired (clutter): in view and missed on the first two reviews, removed.
     ReviewStats rs = scan(*r, z, id, policy);
@@ -159,7 +160,9 @@ TEST_CASE_TEMPLATE("existence: removal marginalises the landmark and P stays pos
     }
     REQUIRE(r->slam.update(r->obs, r->assoc, r->ws) == Status::kOk);
     ReviewStats rs;
-    REQUIRE(r->slam.review(r->obs, r->pred, r->assoc, view, LandmarkPolicy{}, rs) == Status::kOk);
+    LandmarkPolicy policy;
+    policy.reserve_nats = 4.6f;  // MRCLAM's rules: six misses in a row remove a landmark seen long
+    REQUIRE(r->slam.review(r->obs, r->pred, r->assoc, view, policy, rs) == Status::kOk);
     return rs;
   };
   for (int k = 0; k < 3; ++k) (void)one_scan(true);

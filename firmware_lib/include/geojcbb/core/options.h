@@ -53,8 +53,8 @@
     "log-odds of existence (+log(pD/pFA) per pairing, +log((1-pD)/(1-pFA)) per miss) that confirms a landmark") \
   X(F32, landmark_delete_nats, -4, (OPEN, -1e6, 0), "nats", "--delete-nats", \
     "log-odds of existence at or below which a landmark, confirmed or not, is removed (a new one starts at 0)") \
-  X(F32, landmark_reserve_nats, 4.6, (GE, 0, 0), "nats", "--reserve-nats", \
-    "log-odds of existence a landmark holds at most beyond landmark_confirm_nats: misses that remove one seen long") \
+  X(F32, landmark_reserve_nats, 1000, (GE, 0, 0), "nats", "--reserve-nats", \
+    "log-odds of existence a landmark holds at most beyond landmark_confirm_nats (MRCLAM's rules: 4.6; 1000: kept)") \
   X(INT, max_tentative_reviews, 10, (CLOSED, 1, 255), "", "--max-tentative-reviews", \
     "reviews a landmark may stay tentative (below landmark_confirm_nats) before it is removed") \
   X(BOOL, tentative_isolated, 0, (ANY, 0, 0), "", "--tentative-isolated", \

@@ -40,7 +40,7 @@ namespace geojcbb::ekf {
 struct LandmarkPolicy {
   float confirm_nats = 4.6f;
   float delete_nats = -4.0f;
-  float reserve_nats = 4.6f;
+  float reserve_nats = 1000.0f;
   int max_tentative_reviews = 10;
   float p_detect = 0.9f;
   float clutter_density = 0.003f;

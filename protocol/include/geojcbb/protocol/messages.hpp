@@ -186,7 +186,7 @@ struct Config : Codec<Config> {
   float sensor_theta_rad = 0.0f;            ///< its heading [-pi, pi]
   float landmark_confirm_nats = 4.6f;       ///< log-odds of existence that confirms, (0, 1e6)
   float landmark_delete_nats = -4.0f;       ///< log-odds at or below which a landmark goes, (-1e6, 0)
-  float landmark_reserve_nats = 4.6f;       ///< log-odds it can hold beyond confirmation, >= 0
+  float landmark_reserve_nats = 1000.0f;    ///< log-odds it can hold beyond confirmation, >= 0
   std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
   bool tentative_isolated = false;          ///< tentative landmarks paired apart, updating only themselves
   bool joint_recheck = true;
