@@ -1,6 +1,7 @@
 // ekf: the landmark book, one record per landmark of the map in index order (its id, first
-// estimate and covariance, and the review's counters), and the bookkeeping that reads nothing but
-// the book: add, remove keeping the order, index_of, the review's counting and keep-or-remove rules.
+// estimate and covariance, its log-odds of existence and the review's counters), and the
+// bookkeeping that reads nothing but the book: add, remove keeping the order, index_of, the
+// review's evidence and keep-or-remove rules (LandmarkPolicy, ExistenceEvidence).
 //   add, count O(1);  index_of O(log n);  choose_kept, retain O(n);  n <= MaxLandmarks
 // Ids are stable: add() hands out increasing ids and removal keeps the order, so the id of index j
 // only ever grows with j, and index_of() is a binary search. The filter's state and covariance are
@@ -9,9 +10,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/math.hpp"
 #include "geojcbb/core/settings.hpp"
 
 namespace geojcbb::ekf {
