@@ -63,14 +63,10 @@ class SlamStep {
       st = chi2_inv(s.static_gate_level, 2, static_gate);
       if (st != Status::kOk) return st;
     }
-    double individual = 0;  // the association's individual gate: the area of a landmark's p_FA
-    st = chi2_inv(s.confidence, 2, individual);
-    if (st != Status::kOk) return st;
     // The stages' option structs from the table (bind_options: generated, type-checked).
     ekf::LandmarkPolicy policy;
     ekf::bind_options(s, policy);
     policy.static_gate_d2 = static_cast<float>(static_gate);
-    policy.gate_d2 = static_cast<float>(individual);
     policy.p_detect = static_cast<float>(s.loop_detection_probability);
     policy.clutter_density = static_cast<float>(s.loop_unexplained_density);
     if (!policy.valid()) return Status::kInvalidInput;
@@ -93,6 +89,7 @@ class SlamStep {
     gate_ = static_cast<T>(gate);
     ekf::bind_options(s, view_);
     policy_ = policy;
+    policy_.gate_d2 = static_cast<float>(cfg_.gate.individual);  // the area of a landmark's p_FA (> 0)
     ekf::bind_options(s, filter_);
     configured_ = true;
     return Status::kOk;
@@ -378,8 +375,10 @@ class SlamStep {
     if (!hold && slam_.review(obs, pred_, assoc_, view_, policy_, rs, clock, &existence) != Status::kOk) {
       rs = ekf::ReviewStats{};
     }
-    for (int k = 0; k < (cfg_.tentative_isolated ? tentative_.jumped() : 0); ++k) {  // <= kMaxMovers
-      rs.removed_moved += slam_.forget(tentative_.jumped(k)) == Status::kOk;         // a mover's landmark
+    if (cfg_.tentative_isolated) {                     // the movers' landmarks Tentative::pair found jumped
+      for (int k = 0; k < tentative_.jumped(); ++k) {  // <= kMaxMovers
+        rs.removed_moved += slam_.forget(tentative_.jumped(k)) == Status::kOk;
+      }
     }
     if (merge_.due()) rs.merged = merge_.merge(cfg_, pred_, assoc_, slam_, ekf_ws_);
     const std::uint32_t t4 = clock ? clock() : 0;
