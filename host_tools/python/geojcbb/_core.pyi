@@ -101,7 +101,7 @@ class Options(TypedDict, total=False):
     loop_inflation: float  # default 4
     loop_detection_probability: float  # default 0.9
     loop_unexplained_density: float  # default 0.003
-    loop_merge_d2: float  # default 0
+    duplicate_merge_d2: float  # default 0
     hypothesis_rivals: int  # default 0
     hypothesis_window_scans: int  # default 5
     hypothesis_margin_nats: float  # default 3

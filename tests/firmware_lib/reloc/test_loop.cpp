@@ -239,8 +239,10 @@ TEST_CASE("loop: the closure check off leaves the step as it was") {
   CHECK(off->out.counts.loop == 0u);
 }
 
-TEST_CASE_TEMPLATE("loop: a closure's duplicate is merged into the landmark it repeats; ids stay, P stays definite", T,
-                   float, double) {
+TEST_CASE_TEMPLATE(
+    "merge: a duplicate never observed with the landmark it repeats is merged into it; ids stay, P stays "
+    "definite",
+    T, float, double) {
   const auto map = test::reloc_map();
   const Pose2<double> truth{-4, -3, 0.4};
   int k = -1;  // the first landmark in view: it gets a duplicate, mapped 0.36 m off and unsure
@@ -252,8 +254,7 @@ TEST_CASE_TEMPLATE("loop: a closure's duplicate is merged into the landmark it r
   for (const T merge_d2 : {T(0), T(9.21)}) {  // off; chi2(0.99, 2)
     CAPTURE(merge_d2);
     StepSettings<T> s = test::reloc_settings<T>();
-    s.loop_age = 1;
-    s.loop_merge_d2 = merge_d2;
+    s.duplicate_merge_d2 = merge_d2;
     auto rig = test::make_known_map_rig<T, B>(map, s, truth, Mat3<T>::Identity() * T(1e-4));
     FeatureId dup = -1;
     const Eigen::Vector2d copy = map[std::size_t(k)] + Eigen::Vector2d(0.3, -0.2);
@@ -284,6 +285,41 @@ TEST_CASE_TEMPLATE("loop: a closure's duplicate is merged into the landmark it r
     REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
     for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
   }
+}
+
+TEST_CASE_TEMPLATE("merge: two landmarks observed in one scan are distinct for good, however close", T, float, double) {
+  auto map = test::reloc_map();
+  const Pose2<double> truth{-4, -3, 0.4};
+  int k = -1;  // the first landmark in view: a second one 1.5 m from it, not known, is observed with it
+  for (std::size_t j = 0; j < map.size() && k < 0; ++j) {
+    const double dx = map[j].x() - truth.x, dy = map[j].y() - truth.y;
+    if (std::hypot(dx, dy) < 15 && std::abs(wrap_angle(std::atan2(dy, dx) - truth.theta)) < 1.2) k = int(j);
+  }
+  REQUIRE(k >= 0);
+  auto both = map;
+  both.push_back(map[std::size_t(k)] + Eigen::Vector2d(1.5, 0.0));
+  StepSettings<T> s = test::reloc_settings<T>();
+  s.augment = true;
+  s.duplicate_merge_d2 = T(1000);  // lenient: only the memory keeps the two apart
+  s.landmark_delete_nats = -1000;  // misses do not remove the new landmark: only a merge could
+  auto rig = test::make_known_map_rig<T, B>(map, s, truth, Mat3<T>::Identity() * T(1e-4));
+  observe_from(both, truth, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  const FeatureId added = FeatureId(map.size());
+  int news = 0;
+  for (int i = 0; i < rig->out.count; ++i) news += rig->out.outcome[i] == node::Outcome::kNewLandmark;
+  REQUIRE(news == 1);
+  const ekf::Slam<T, B>& slam = rig->step.slam();
+  REQUIRE(slam.index_of(added) >= 0);
+  // Close enough for the merge test: without the memory the next scan, which misses it, merges them.
+  CHECK(slam.duplicate_d2(k, slam.index_of(added)) < T(1000));
+  for (int scan = 0; scan < 3; ++scan) {
+    observe_from(map, truth, rig->obs);  // the second one missed
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(rig->out.review.merged == 0);
+    CHECK(slam.index_of(added) >= 0);
+  }
+  CHECK(slam.landmarks() == int(map.size()) + 1);
 }
 
 TEST_CASE_TEMPLATE("ekf: an update linearised at the estimate is the plain update; inflate_pose", T, float, double) {

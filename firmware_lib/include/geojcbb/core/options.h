@@ -120,8 +120,8 @@
     "p_D: a landmark in view is observed (set likelihood: relocaliser, loop check, window, lost test; existence)") \
   X(REAL, loop_unexplained_density, 0.003, (GT, 0, 0), "1/m^2", "--loop-density", \
     "observations per m^2 no landmark explains (clutter, newer landmarks): set likelihood; existence's pFA") \
-  X(REAL, loop_merge_d2, 0, (GE, 0, 0), "", "--loop-merge-d2", \
-    "after a loop closure, two landmarks of the local region closer than this d2 are merged (0: off)") \
+  X(REAL, duplicate_merge_d2, 0, (GE, 0, 0), "", "--duplicate-merge-d2", \
+    "two landmarks never observed in one scan whose difference d2 is below this are one: merged (0: off)") \
   X(INT, hypothesis_rivals, 0, (CLOSED, 0, 2), "", "--hypothesis-rivals", \
     "pose hypotheses kept beside the best while a scan is ambiguous, each scored on the scans after (0: off)") \
   X(INT, hypothesis_window_scans, 5, (CLOSED, 1, 32), "scans", "--hypothesis-window", \

@@ -158,7 +158,7 @@ class LandmarkBook {
   LandmarkRecord<T>& operator[](int j) { return rec_[j]; }
 
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
-  int index_of(FeatureId id) const {
+  [[gnu::noinline]] int index_of(FeatureId id) const {
     int lo = 0, hi = n_;  // binary search: ids increase with the index; <= log2(MaxLandmarks) + 1 steps
     while (lo < hi) {
       const int mid = lo + (hi - lo) / 2;

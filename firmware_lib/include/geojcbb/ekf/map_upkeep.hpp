@@ -45,7 +45,7 @@ Status Slam<T, B>::review(const Observations<T, B>& obs, const Prediction<T, B>&
 }
 
 template <typename T, class B>
-inline T Slam<T, B>::duplicate_d2(int a, int b) const {
+T Slam<T, B>::duplicate_d2(int a, int b) const {
   if (a < 0 || b < 0 || a >= landmarks() || b >= landmarks() || a == b) return std::numeric_limits<T>::infinity();
   const int la = Layout::landmark(a), lb = Layout::landmark(b);
   const T s00 = cov(la, la) + cov(lb, lb) - T(2) * cov(la, lb);

@@ -748,8 +748,8 @@ class Slam {
   /// covariance P_aa + P_bb - P_ab - P_ba (their correlation counts: two estimates of one landmark
   /// made from one drifting pose are close in this metric even when far in metres).
   /// @return d^T S^-1 d; +inf for an index out of range, a == b, or S not positive definite. Reads
-  ///         only.  O(1)
-  T duplicate_d2(int a, int b) const;
+  ///         only.  O(1). Out of line: the merge stage calls it from two loops.
+  [[gnu::noinline]] T duplicate_d2(int a, int b) const;
 
   /// Landmarks keep and drop (indices) are one landmark mapped twice (a duplicate a loop closure
   /// reveals): the constraint l_keep - l_drop = 0 is fused as an update (H = [0 .. I .. -I ..],

@@ -16,6 +16,7 @@
 // on the device. Every call validates first and changes no state unless it returns kOk.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -97,6 +98,9 @@ class SlamStep {
 
   bool configured() const { return configured_; }
   const ekf::Slam<T, B>& slam() const { return slam_; }
+  /// The last scan's prediction (the local region's candidates, h and H P H^T), for the host's
+  /// innovation statistics.
+  const Prediction<T, B>& prediction() const { return pred_; }
 
   /// @return the statuses of ekf::Slam::reset.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) {
@@ -364,9 +368,10 @@ class SlamStep {
         }
       }
     }
-    // A loop closure's old landmarks, for the merges of its duplicates after this scan's review and
-    // the next kLoopSettleScans - 1 (the map after augment: the view reads it as it is now).
-    if (cfg_.loop_merge_d2 > T(0)) merge_.note(cfg_, map, assoc_);
+    // The scan's observed landmarks (paired, or added from it) are distinct for good; the pairs that
+    // could later pass the merge test are remembered (the relative covariance only shrinks).
+    if (cfg_.duplicate_merge_d2 > T(0))
+      merge_.note(slam_, out, std::max(T(4) * cfg_.duplicate_merge_d2, cfg_.gate.individual));
     if (cfg_.tentative_isolated) tentative_.catch_movers(map, assoc_);
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above. A scan the hypothesis
@@ -380,7 +385,8 @@ class SlamStep {
         rs.removed_moved += slam_.forget(tentative_.jumped(k)) == Status::kOk;
       }
     }
-    if (merge_.due()) rs.merged = merge_.merge(cfg_, pred_, assoc_, slam_, ekf_ws_);
+    if (cfg_.duplicate_merge_d2 > T(0) && !hold)
+      rs.merged = merge_.merge(cfg_.duplicate_merge_d2, pred_, out, slam_, ekf_ws_);
     const std::uint32_t t4 = clock ? clock() : 0;
     out.diag = assoc_.diag;
     out.review = rs;

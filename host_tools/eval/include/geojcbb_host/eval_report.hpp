@@ -136,7 +136,7 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
         f,
         "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
         "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
-        "clutter paired; with --loop-check, closures committed and scans held pending; with --loop-merge-d2, "
+        "clutter paired; with --loop-check, closures committed and scans held pending; with --duplicate-merge-d2, "
         "duplicates merged; a landmark's false pairs by place: another landmark of its group (MRCLAM: within a row of "
         "tubes) or elsewhere; with --hypotheses, windows opened, committed and scans open; with --cluster-first, observations "
         "paired anew\n");

@@ -25,6 +25,6 @@
   X(window_commits, "hypothesis_windows_committed", "windows that committed a leader") \
   X(window_held_scans, "hypothesis_window_scans", "scans a window was open (the opening one included)") \
   X(regrouped, "cluster_first_regrouped", "observations cluster_first paired anew") \
-  X(merges, "landmarks_merged", "duplicates merged after a closure (loop_merge_d2)")
+  X(merges, "landmarks_merged", "duplicates merged by evidence (duplicate_merge_d2)")
 // clang-format on
 #define GEOJCBB_RUN_COUNTER_MEMBER(name, key, doc) int name = 0;

@@ -220,7 +220,7 @@ struct Config : Codec<Config> {
   float loop_inflation = 4.0f;               ///< >= 1
   float loop_detection_probability = 0.9f;   ///< (0, 1)
   float loop_unexplained_density = 0.003f;   ///< > 0
-  float loop_merge_d2 = 0.0f;                ///< >= 0 (0: off)
+  float duplicate_merge_d2 = 0.0f;           ///< >= 0 (0: off)
   std::uint8_t hypothesis_rivals = 0;        ///< pose hypotheses beside the best, 0 (off) .. 2
   std::uint8_t hypothesis_window_scans = 5;  ///< 1 .. 32
   float hypothesis_margin_nats = 3.0f;       ///< > 0
@@ -297,8 +297,8 @@ struct Config : Codec<Config> {
         field("loop_detection_probability", &Config::loop_detection_probability,
               range::interval(0.0f, 1.0f, true, true)),
         field("loop_unexplained_density", &Config::loop_unexplained_density, range::above(0.0f), "1/m^2"),
-        field("loop_merge_d2", &Config::loop_merge_d2, range::not_below(0.0f), "",
-              "after a closure, landmarks closer than this d2 are merged (0: off)"),
+        field("duplicate_merge_d2", &Config::duplicate_merge_d2, range::not_below(0.0f), "",
+              "landmarks never observed together closer than this d2 are merged (0: off)"),
         field("hypothesis_rivals", &Config::hypothesis_rivals, range::between(0, 2), "", "0: off"),
         field("hypothesis_window_scans", &Config::hypothesis_window_scans, range::between(1, 32), "scans"),
         field("hypothesis_margin_nats", &Config::hypothesis_margin_nats, range::above(0.0f), "nats"),

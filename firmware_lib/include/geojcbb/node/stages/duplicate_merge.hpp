@@ -1,99 +1,120 @@
-// node/stages: a loop closure's duplicates merged (StepSettings::loop_merge_d2 > 0). Its state across
-// scans: the last closure's old landmarks (ids, with the age a duplicate of each may have) and the
-// reviews left after which merge() runs.
-//   note()   before the review: a scan that pairs old landmarks (confirmed, unpaired for loop_age
-//            reviews) is a closure; its old landmarks become the closure set
-//   merge()  after the review, on that scan and the next kLoopSettleScans - 1: the closest landmark
-//            of the region added while an old one was unseen, within loop_merge_d2 of it in
-//            ekf::Slam::duplicate_d2 and not paired by this scan with it, is merged into it
-// Map upkeep: merge() edits the filter (ekf::Slam::merge). Bounds: O(kMaxMergesPerScan (m n_c + n^2)).
+// node/stages: duplicates merged by evidence (StepSettings::duplicate_merge_d2 > 0; docs/design.md,
+// "Duplicates merged by evidence"). Its state across scans: the pairs of landmarks known to be distinct.
+//   note()   after augment: every two landmarks observed in this scan (paired, or added from it) are
+//            distinct for good; the pairs of them close enough to be confused later (ekf::Slam::
+//            duplicate_d2 within the association's individual gate) are remembered
+//   merge()  after the review: a landmark paired by this scan and a landmark of the scan's prediction
+//            it did not pair, never observed together, whose difference is within duplicate_merge_d2
+//            (the joint test at a strict level) are one landmark: merged, the earlier id kept
+// Map upkeep: merge() edits the filter (ekf::Slam::merge). Bounds: note O(kMaxObservations^2
+// kMaxDistinct), merge O(kMaxMergesPerScan (kMaxObservations kMaxCandidates + kMaxDistinct + n^2)).
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "geojcbb/core/association_config.hpp"
-#include "geojcbb/node/stages/map_view.hpp"
-#include "geojcbb/reloc/loop.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/step_result.hpp"
 
 namespace geojcbb::node {
 
 template <typename T, class B>
 class DuplicateMerge {
  public:
-  /// Merges of a loop closure's duplicates after one scan's review, at most.
+  /// Merges after one scan's review, at most.
   static constexpr int kMaxMergesPerScan = 4;
+  /// Distinct pairs remembered; when the memory is full a new pair overwrites the oldest.
+  static constexpr int kMaxDistinct = 2 * B::kMaxObservations;
 
   void reset() {
-    left_ = 0;
     count_ = 0;
+    next_ = 0;
   }
-  /// Whether this scan's review is followed by merge().
-  bool due() const { return left_ > 0; }
+  int distinct_pairs() const { return count_; }
 
-  /// Before the review: the scan's pairs with old landmarks, each with the reviews it was unseen
-  /// plus one (a landmark added later has at most that age after this review). A scan that pairs
-  /// none keeps the set of the last closure.
-  void note(const AssociationConfig<T, B>& cfg, const MapView<T, B>& map, const Association<T, B>& assoc) {
-    int n = 0;
-    for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
-      const int k = map.slot_of(assoc.feature[i]);
-      if (k < 0 || map.unseen(k) < cfg.loop_age || !map.confirmed(k)) continue;
-      id_[static_cast<std::size_t>(n)] = assoc.feature[i];
-      limit_[static_cast<std::size_t>(n)] = static_cast<std::int16_t>(map.unseen(k) + 1);
-      ++n;
+  /// After augment: the pairs of this scan's observed landmarks (out: kPaired and kNewLandmark) with
+  /// duplicate_d2 below watch_d2 are remembered as distinct. A removed landmark's pairs stay until
+  /// overwritten (ids are never reused, so they never match again).
+  [[gnu::noinline]] void note(const ekf::Slam<T, B>& slam, const StepResult<T, B>& out, T watch_d2) {
+    for (int a = 0; a < out.count; ++a) {  // <= kMaxObservations
+      if (!observed(out, a)) continue;
+      const int ja = slam.index_of(out.feature[a]);
+      for (int b = a + 1; b < out.count && ja >= 0; ++b) {  // <= kMaxObservations
+        if (!observed(out, b) || out.feature[b] == out.feature[a]) continue;
+        if (!(slam.duplicate_d2(ja, slam.index_of(out.feature[b])) < watch_d2)) continue;
+        remember(out.feature[a], out.feature[b]);
+      }
     }
-    if (n == 0) return;
-    count_ = n;
-    left_ = reloc::kLoopSettleScans;
   }
 
-  /// After the review (due()): up to kMaxMergesPerScan merges, the closest pair first. Two
-  /// landmarks both seen since the original's last sighting are never merged, however close.
-  /// Out of line: its flags stay out of the step's frame. @return landmarks merged
-  [[gnu::noinline]] int merge(const AssociationConfig<T, B>& cfg, const Prediction<T, B>& pred,
-                              const Association<T, B>& assoc, ekf::Slam<T, B>& slam, ekf::SlamWorkspace<T, B>& ws) {
-    --left_;
+  /// After the review: up to kMaxMergesPerScan merges, the closest pair first (a landmark paired by
+  /// the scan, one of the scan's prediction it did not pair; never observed together; duplicate_d2
+  /// below merge_d2). The survivor is the earlier (smaller) id; it takes the other's distinct pairs.
+  /// @return landmarks merged
+  [[gnu::noinline]] int merge(T merge_d2, const Prediction<T, B>& pred, const StepResult<T, B>& out,
+                              ekf::Slam<T, B>& slam, ekf::SlamWorkspace<T, B>& ws) {
     bool paired[B::kMaxCandidates];
-    for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
-      paired[a] = false;
-      for (int i = 0; i < assoc.count && !paired[a]; ++i) {  // <= kMaxObservations
-        paired[a] = assoc.feature[i] == pred.id[a];
+    for (int c = 0; c < pred.count; ++c) {  // <= kMaxCandidates
+      paired[c] = false;
+      for (int i = 0; i < out.count && !paired[c]; ++i) {  // <= kMaxObservations
+        paired[c] = out.outcome[i] == Outcome::kPaired && out.feature[i] == pred.id[c];
       }
     }
     int merged = 0;
     for (int m = 0; m < kMaxMergesPerScan; ++m) {  // <= kMaxMergesPerScan
       int keep = -1, drop = -1;
-      T best = cfg.loop_merge_d2;
-      for (int k = 0; k < count_; ++k) {  // <= kMaxObservations: the closure's old landmarks
-        const FeatureId id = id_[static_cast<std::size_t>(k)];
-        const int ja = slam.index_of(id);
-        if (ja < 0) continue;  // removed since
-        bool a_paired = false;
-        for (int i = 0; i < assoc.count && !a_paired; ++i) a_paired = assoc.feature[i] == id;  // <= kMaxObservations
-        for (int b = 0; b < pred.count; ++b) {                                                 // <= kMaxCandidates
-          const int jb = slam.index_of(pred.id[b]);
-          if (jb < 0 || jb == ja || (a_paired && paired[b])) continue;
-          if (slam.age(jb) > limit_[static_cast<std::size_t>(k)]) continue;  // older than the absence
+      T best = merge_d2;
+      for (int i = 0; i < out.count; ++i) {  // <= kMaxObservations
+        if (out.outcome[i] != Outcome::kPaired) continue;
+        const int ja = slam.index_of(out.feature[i]);
+        for (int c = 0; c < pred.count && ja >= 0; ++c) {  // <= kMaxCandidates
+          if (paired[c]) continue;
+          const int jb = slam.index_of(pred.id[c]);
+          if (jb < 0) continue;  // removed by the review, or merged
           const T d2 = slam.duplicate_d2(ja, jb);
-          if (!(d2 < best)) continue;
+          if (!(d2 < best) || known_distinct(out.feature[i], pred.id[c])) continue;
           best = d2;
-          keep = ja;
-          drop = jb;
+          keep = ja < jb ? ja : jb;
+          drop = ja < jb ? jb : ja;
         }
       }
-      if (keep < 0 || slam.merge(keep, drop, ws) != Status::kOk) break;
+      if (keep < 0) break;
+      const FeatureId kept = slam.id(keep), gone = slam.id(drop);
+      if (slam.merge(keep, drop, ws) != Status::kOk) break;
+      for (int k = 0; k < count_; ++k) {  // <= kMaxDistinct: what was distinct from the copy is from the survivor
+        auto& p = pair_[static_cast<std::size_t>(k)];
+        if (p[0] == gone) p[0] = kept;
+        if (p[1] == gone) p[1] = kept;
+      }
       ++merged;
     }
-    for (int k = 0; k < count_; ++k) ++limit_[static_cast<std::size_t>(k)];  // <= kMaxObservations: a review later
     return merged;
   }
 
  private:
-  int left_ = 0;   ///< reviews after a loop closure that are followed by merge()
-  int count_ = 0;  ///< the last closure's old landmarks
-  std::array<FeatureId, B::kMaxObservations> id_{};
-  std::array<std::int16_t, B::kMaxObservations> limit_{};  ///< the age a duplicate may have, at most
+  static bool observed(const StepResult<T, B>& out, int i) {
+    return out.outcome[i] == Outcome::kPaired || out.outcome[i] == Outcome::kNewLandmark;
+  }
+  [[gnu::noinline]] bool known_distinct(FeatureId a, FeatureId b) const {
+    for (int k = 0; k < count_; ++k) {  // <= kMaxDistinct
+      const auto& p = pair_[static_cast<std::size_t>(k)];
+      if ((p[0] == a && p[1] == b) || (p[0] == b && p[1] == a)) return true;
+    }
+    return false;
+  }
+  void remember(FeatureId a, FeatureId b) {
+    if (known_distinct(a, b)) return;
+    if (count_ < kMaxDistinct) {
+      pair_[static_cast<std::size_t>(count_++)] = {a, b};
+      return;
+    }
+    pair_[static_cast<std::size_t>(next_)] = {a, b};  // full: the oldest slot
+    next_ = (next_ + 1) % kMaxDistinct;
+  }
+
+  int count_ = 0;  ///< distinct pairs remembered
+  int next_ = 0;   ///< the slot a new pair overwrites when the memory is full
+  std::array<std::array<FeatureId, 2>, kMaxDistinct> pair_{};
 };
 
 }  // namespace geojcbb::node
