@@ -39,6 +39,8 @@ struct ReplayOptions {
   CommonFlags flags;       ///< --strategies, --truth, --out-dir, --jobs, --no-progress, --no-svg, the link
   replay::LogNoise noise;  ///< 0: from the lines, or from the data
   bool noise_from_data = false;
+  bool innovations = false;  ///< --noise-from-innovations
+  int innovation_rounds = 6;
   double noise_inflation = 1.5;
   double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
   bool known_map = false;
@@ -145,6 +147,50 @@ std::string gps_csv(const GpsScore* g, const RunResult& r) {
   return o.str();
 }
 
+// The noise from the innovations (docs/replay.md, "Noise from the innovations"): `rounds` rounds of
+// innovation_round with `m`, each printed (with the GPS RMSE when the log has fixes: a column of
+// the table, never an input).
+struct InnovationEstimate {
+  NoiseScales scales;
+  nlohmann::json rounds = nlohmann::json::array();
+};
+InnovationEstimate noise_from_innovations(const replay::LogSource& source, const RunOptions& base, const Method& m,
+                                          int rounds, const std::vector<replay::GpsEvent>& gps,
+                                          const GpsOptions& gps_opt) {
+  InnovationEstimate e;
+  NoiseScales& s = e.scales;
+  std::printf("noise from the innovations (%s, %d rounds):\n", m.name().c_str(), rounds);
+  std::printf(
+      "| round | R range x | R bearing x | odometry x | pairings | mean NIS | NIS range | NIS bearing | R's share of S range "
+      "| bearing | landmarks | GPS RMSE [m] |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (int round = 0; round < rounds; ++round) {
+    RunOptions ro = base;
+    m.apply(ro);
+    ro.record_trace = !gps.empty();
+    const NoiseScales at = s;
+    const RunResult r = innovation_round(source, ro, s);
+    const double rmse = gps.empty() ? NAN : score_gps(r.trace, gps, gps_opt).rmse_m;
+    const InnovationSums& in = r.innovations;
+    const double n = static_cast<double>(in.n);
+    const double nis = r.nis_sum / static_cast<double>(std::max(1L, r.nis_pairings));
+    std::printf("| %d | %.4g | %.4g | %.4g | %ld | %.3f | %.3f | %.3f | %.2f | %.2f | %d | %.2f |\n", round + 1,
+                at.range, at.bearing, at.odometry, in.n, nis, in.nis[0] / n, in.nis[1] / n, in.r_share[0] / n,
+                in.r_share[1] / n, r.landmarks, rmse);
+    e.rounds.push_back({{"round", round + 1},
+                        {"scales", {at.range, at.bearing, at.odometry}},
+                        {"pairings", in.n},
+                        {"mean_nis", nis},
+                        {"nis", {in.nis[0] / n, in.nis[1] / n}},
+                        {"r_share", {in.r_share[0] / n, in.r_share[1] / n}},
+                        {"landmarks", r.landmarks},
+                        {"gps_rmse_m", gps.empty() ? nlohmann::json() : nlohmann::json(rmse)}});
+  }
+  std::printf("scales: R range x %.4g, R bearing x %.4g, odometry x %.4g (variances)\n", s.range, s.bearing,
+              s.odometry);
+  return e;
+}
+
 int run_replay(const ReplayOptions& o) {
   const replay::EventLog log = replay::read_event_log(o.log);
   const bool labelled = log.labelled();
@@ -159,7 +205,13 @@ int run_replay(const ReplayOptions& o) {
   if (o.noise.sigma_bearing_rad > 0) noise.sigma_bearing_rad = o.noise.sigma_bearing_rad;
   if (o.noise.sigma_v_mps > 0) noise.sigma_v_mps = o.noise.sigma_v_mps;
   if (o.noise.sigma_w_radps > 0) noise.sigma_w_radps = o.noise.sigma_w_radps;
-  const replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
+  if (o.innovations) {  // a generic start where nothing gives the noise: the rounds scale it
+    if (noise.sigma_range_m <= 0) noise.sigma_range_m = 0.1;
+    if (noise.sigma_bearing_rad <= 0) noise.sigma_bearing_rad = 0.05;
+    if (noise.sigma_v_mps <= 0) noise.sigma_v_mps = 0.1;
+    if (noise.sigma_w_radps <= 0) noise.sigma_w_radps = 0.1;
+  }
+  replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
   const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
   RunOptions base = o.run;
   base.record_trace = !log.gps.empty();
@@ -175,6 +227,21 @@ int run_replay(const ReplayOptions& o) {
     base.known_map = positions;
   }
   const std::vector<Method> strategies = select_methods(o.flags.strategies, true, o.flags.oracle);
+  InnovationEstimate estimate;
+  const NoiseScales& scales = estimate.scales;
+  if (o.innovations) {
+    const auto learner = std::find_if(strategies.begin(), strategies.end(), [](const Method& m) { return !m.oracle; });
+    if (learner == strategies.end())
+      throw std::runtime_error("--noise-from-innovations needs a strategy besides TRUTH");
+    estimate = noise_from_innovations(source, base, *learner, o.innovation_rounds,
+                                      o.runner ? std::vector<replay::GpsEvent>() : log.gps, gps_opt);
+    source.scale_noise(scales.range, scales.bearing, scales.odometry);
+    noise_from += ", then scaled from the innovations (a line's own noise too)";
+    noise.sigma_range_m *= std::sqrt(scales.range);  // what the replays below use where a line gives none
+    noise.sigma_bearing_rad *= std::sqrt(scales.bearing);
+    noise.sigma_v_mps *= std::sqrt(scales.odometry);
+    noise.sigma_w_radps *= std::sqrt(scales.odometry);
+  }
   if (o.runner && !log.gps.empty()) {
     std::printf("GPS scoring needs the pose after every input, which a device does not report: not scored\n");
   }
@@ -285,6 +352,11 @@ int run_replay(const ReplayOptions& o) {
                    {"sigma_bearing_rad", noise.sigma_bearing_rad},
                    {"sigma_v_mps", noise.sigma_v_mps},
                    {"sigma_w_radps", noise.sigma_w_radps}};
+    if (o.innovations) {
+      js["noise"]["innovation_scales"] = {
+          {"range_var", scales.range}, {"bearing_var", scales.bearing}, {"odometry_var", scales.odometry}};
+      js["noise"]["innovation_rounds"] = estimate.rounds;
+    }
     js["wall_s"] = wall_s;
     js["strategies"] = rows_json(rows);
     // As in replay.csv, a score the log cannot give is null, never 0.
@@ -370,6 +442,13 @@ Subcommand add_replay_command(CLI::App& app) {
   rp->add_flag("--noise-from-data", o->noise_from_data,
                "estimate the noise from the labelled measurements, truth and landmark lines (robust spreads; a "
                "--sigma-* given overrides its part)");
+  rp->add_flag("--noise-from-innovations", o->innovations,
+               "for a log without labels or truth: R (range, bearing) and the odometry noise scaled so that the pairs' "
+               "innovations match their covariance, in rounds of replays with the first strategy (docs/replay.md); "
+               "from the noise the log and the --sigma-* give (else 0.1 m, 0.05 rad, 0.1 m/s, 0.1 rad/s)");
+  rp->add_option("--innovation-rounds", o->innovation_rounds, "--noise-from-innovations: replays, each one round")
+      ->default_val(o->innovation_rounds)
+      ->check(CLI::Range(1, 50));
   rp->add_option("--group-radius", o->group_radius_m,
                  "landmarks within this distance [m] form a group, for a group-level score (0: none)")
       ->default_val(0.0)

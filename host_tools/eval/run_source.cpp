@@ -1,6 +1,7 @@
 // host_tools/eval: the simulator's and the recorded inputs of a run (run_source.hpp).
 #include "geojcbb_host/run_source.hpp"
 
+#include <cmath>
 #include <memory>
 
 #include "geojcbb/ekf/motion.hpp"
@@ -89,6 +90,21 @@ RecordedSource::RecordedSource(RunSource& src) {
   P0 = src.P0;
   RunInput in;
   while (src.next(in)) inputs_.push_back(in);
+}
+
+void RecordedSource::scale_noise(double range_var, double bearing_var, double odometry_var) {
+  const double sr = std::sqrt(range_var), sb = std::sqrt(bearing_var), sq = std::sqrt(odometry_var);
+  for (RunInput& in : inputs_) {
+    for (SimObservation& o : in.observations) {
+      o.R(0, 0) *= range_var;
+      o.R(1, 1) *= bearing_var;
+      o.R(0, 1) *= sr * sb;
+      o.R(1, 0) *= sr * sb;
+    }
+    in.sigma_v_mps *= sq;
+    in.sigma_w_radps *= sq;
+    in.increment_cov *= odometry_var;
+  }
 }
 
 bool RecordedSource::next(RunInput& in) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/node/slam_step.hpp"
 
 namespace geojcbb::host {
@@ -218,10 +219,23 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   }
   res.merges += s.result.review.merged;
   res.evicted += s.result.review.evicted;
+  const Prediction<double, EB>& pred = s.step.prediction();
   for (std::size_t i = 0; i < scan.size(); ++i) {
     if (r.outcome[i] != node::Outcome::kPaired) continue;
     ++res.nis_pairings;
     res.nis_sum += r.d2[i];
+    for (int c = 0; c < pred.count; ++c) {  // the pair's candidate: its innovation, H P H^T and R
+      if (pred.id[static_cast<std::size_t>(c)] != r.feature[i]) continue;
+      const Eigen::Vector2d nu(s.obs.z[i].x() - pred.h[static_cast<std::size_t>(c)].x(),
+                               wrap_angle(s.obs.z[i].y() - pred.h[static_cast<std::size_t>(c)].y()));
+      ++res.innovations.n;
+      for (int k = 0; k < 2; ++k) {
+        const double R = s.obs.R[i](k, k), S = pred.C(2 * c + k, 2 * c + k) + R;
+        res.innovations.nis[k] += nu(k) * nu(k) / S;
+        res.innovations.r_share[k] += R / S;
+      }
+      break;
+    }
   }
   if (s.result.review.removed > 0 || s.result.review.merged > 0 || s.result.review.evicted > 0) {
     const ekf::Slam<double, EB>& slam = s.step.slam();
@@ -293,6 +307,25 @@ RunResult run_inputs(RunSource& src, const RunOptions& opt) {
 RunResult run_slam(const Scenario& sc, std::uint64_t seed, const RunOptions& opt) {
   SimSource src(sc, seed, opt.max_steps);
   return run_inputs(src, opt);
+}
+
+RunResult innovation_round(const RecordedSource& source, const RunOptions& opt, NoiseScales& s) {
+  double q = 0;
+  if (chi2_inv(opt.step.confidence, 2, q) != Status::kOk) throw std::runtime_error("bad confidence");
+  // E[d2 | d2 < q] / 2 for a chi-square of 2 dof truncated at the gate.
+  const double kappa = 1 - (q / 2) * std::exp(-q / 2) / (1 - std::exp(-q / 2));
+  RecordedSource src = source;
+  src.scale_noise(s.range, s.bearing, s.odometry);
+  src.rewind();
+  RunResult r = run_inputs(src, opt);
+  const InnovationSums& in = r.innovations;
+  if (in.n < 10) throw std::runtime_error("noise from the innovations: fewer than 10 pairings to learn from");
+  const double n = static_cast<double>(in.n);
+  const double rho0 = in.nis[0] / n / kappa, rho1 = in.nis[1] / n / kappa;
+  s.range *= std::sqrt(rho0);
+  s.bearing *= std::sqrt(rho1);
+  s.odometry *= std::sqrt(std::sqrt(rho0 * rho1));
+  return r;
 }
 
 }  // namespace geojcbb::host

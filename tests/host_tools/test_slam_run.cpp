@@ -173,3 +173,33 @@ TEST_CASE("one orchestrator: the evaluation's run is node::SlamStep::step on the
     CHECK(r.landmarks == step->slam().landmarks());
   }
 }
+
+TEST_CASE("noise from the innovations: R and the odometry noise given 4 times too wide are brought back") {
+  // env1's simulated noise is what the filter assumes; the recording's noise is then made 4 times
+  // too wide (variances), as a log whose sigmas were guessed high. The rounds match each component's
+  // NIS to its expectation; no labels, no truth are read.
+  const Scenario sc = env1();
+  SimSource sim(sc, 3, 1500);
+  RecordedSource rec(sim);
+  rec.scale_noise(4, 4, 4);
+  RunOptions o;
+  o.step.strategy = Strategy::kJcbb;
+  auto mean_nis = [](const RunResult& r) { return r.nis_sum / double(r.nis_pairings); };
+  NoiseScales s;
+  const RunResult first = innovation_round(rec, o, s);
+  CHECK(mean_nis(first) < 0.8);  // the spread is a quarter of what the filter expects
+  for (int round = 1; round < 8; ++round) (void)innovation_round(rec, o, s);
+  NoiseScales after = s;
+  const RunResult last = innovation_round(rec, o, after);
+  MESSAGE("learnt x4: range " << 4 * s.range << ", bearing " << 4 * s.bearing << ", odometry " << 4 * s.odometry
+                              << "; mean NIS " << mean_nis(first) << " -> " << mean_nis(last));
+  // Back to the simulated noise within 30 %, and the NIS at its expectation (2, less the gate's 1 %).
+  CHECK(4 * s.range > 0.7);
+  CHECK(4 * s.range < 1.3);
+  CHECK(4 * s.bearing > 0.7);
+  CHECK(4 * s.bearing < 1.3);
+  CHECK(4 * s.odometry > 0.7);
+  CHECK(4 * s.odometry < 1.3);
+  CHECK(mean_nis(last) > 1.7);
+  CHECK(mean_nis(last) < 2.1);
+}

@@ -53,6 +53,14 @@ struct StepRecord {
   bool declared_found = false;  ///< the relocaliser confirmed its pose at this scan (found)
 };
 
+/// Sums over a run's pairings of each innovation component k (0 range, 1 bearing): nis = nu_k^2 / S_kk
+/// (S = H P H^T + R, the pair's innovation covariance; its mean is 1 for a consistent filter), and
+/// the share of S that is R, r = R_kk / S_kk (replay --noise-from-innovations, docs/replay.md).
+struct InnovationSums {
+  long n = 0;
+  double nis[2] = {0, 0}, r_share[2] = {0, 0};
+};
+
 struct RunResult {
   Score score;
   Score group_score;  ///< as score, but a pair is correct when its feature's
@@ -79,6 +87,7 @@ struct RunResult {
   /// Every scan's pairings and the sum of their NIS (d2, 2 dof each), with or without a true pose.
   long nis_pairings = 0;
   double nis_sum = 0;
+  InnovationSums innovations;  ///< every pairing's innovation, per component (noise from innovations)
   /// The pose estimate after every input (RunOptions::record_trace): what a real log without a
   /// true pose is scored by (GPS, trace.hpp).
   std::vector<TracePoint> trace;

@@ -69,6 +69,9 @@ class RecordedSource : public RunSource {
   bool next(RunInput& in) override;
   void rewind() override { at_ = 0; }
   const std::vector<RunInput>& inputs() const { return inputs_; }
+  /// Every measurement's R scaled by (range_var, bearing_var) on its diagonal (the correlation kept)
+  /// and every prediction's noise covariance by odometry_var (replay --noise-from-innovations).
+  void scale_noise(double range_var, double bearing_var, double odometry_var);
 
  protected:
   std::vector<RunInput> inputs_;

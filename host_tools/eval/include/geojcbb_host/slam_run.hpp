@@ -142,6 +142,21 @@ class SlamSession {
 
 /// Runs a source's inputs through a SlamSession. Throws as SlamSession does.
 RunResult run_inputs(RunSource& src, const RunOptions& opt);
+
+/// Noise from the innovations (docs/replay.md, "Noise from the innovations"): factors on the
+/// variances of every measurement's R (range, bearing) and of every prediction's noise.
+struct NoiseScales {
+  double range = 1, bearing = 1, odometry = 1;
+};
+/// One round of the NIS matched to its expectation: replays `source` with its noise scaled by `s`
+/// (RecordedSource::scale_noise) under `opt`, then moves `s` half-way (in log space) to where each
+/// component's mean NIS of the pairs, nu_k^2 / S_kk corrected for the individual gate's truncation,
+/// would be 1. Scaling R and the odometry noise by one factor c scales P and S by c once the pairs
+/// are fixed, so that NIS says by how much: R's k-th variance by rho_k, the odometry's by the
+/// geometric mean of rho_range and rho_bearing. Half a step per round: a narrower gate changes the
+/// pairs, so the next round measures again. Throws with fewer than 10 pairings.
+/// @return the round's run (its innovations and NIS as measured at the scales it was given)
+RunResult innovation_round(const RecordedSource& source, const RunOptions& opt, NoiseScales& s);
 /// Who runs a run's inputs: run_inputs in process, or a device over the link (geojcbb_eval --port).
 using RunInputsFn = std::function<RunResult(RunSource&, const RunOptions&)>;
 
