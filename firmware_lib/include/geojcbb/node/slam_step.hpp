@@ -16,7 +16,6 @@
 // on the device. Every call validates first and changes no state unless it returns kOk.
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -368,10 +367,8 @@ class SlamStep {
         }
       }
     }
-    // The scan's observed landmarks (paired, or added from it) are distinct for good; the pairs that
-    // could later pass the merge test are remembered (the relative covariance only shrinks).
-    if (cfg_.duplicate_merge_d2 > T(0))
-      merge_.note(slam_, out, std::max(T(4) * cfg_.duplicate_merge_d2, cfg_.gate.individual));
+    // The scan's observed landmarks (paired, or added from it) are distinct for good.
+    if (cfg_.duplicate_merge_d2 > T(0)) merge_.note(slam_, out, cfg_.duplicate_merge_d2, cfg_.gate.individual);
     if (cfg_.tentative_isolated) tentative_.catch_movers(map, assoc_);
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above. A scan the hypothesis

@@ -1,8 +1,9 @@
 // node/stages: duplicates merged by evidence (StepSettings::duplicate_merge_d2 > 0; docs/design.md,
 // "Duplicates merged by evidence"). Its state across scans: the pairs of landmarks known to be distinct.
 //   note()   after augment: every two landmarks observed in this scan (paired, or added from it) are
-//            distinct for good; the pairs of them close enough to be confused later (ekf::Slam::
-//            duplicate_d2 within the association's individual gate) are remembered
+//            distinct for good; the pairs of them close enough to pass the merge test later
+//            (ekf::Slam::duplicate_d2 below max(4 duplicate_merge_d2, the individual gate): the
+//            difference's covariance only shrinks) are remembered
 //   merge()  after the review: a landmark paired by this scan and a landmark of the scan's prediction
 //            it did not pair, never observed together, whose difference is within duplicate_merge_d2
 //            (the joint test at a strict level) are one landmark: merged, the earlier id kept
@@ -30,12 +31,12 @@ class DuplicateMerge {
     count_ = 0;
     next_ = 0;
   }
-  int distinct_pairs() const { return count_; }
 
-  /// After augment: the pairs of this scan's observed landmarks (out: kPaired and kNewLandmark) with
-  /// duplicate_d2 below watch_d2 are remembered as distinct. A removed landmark's pairs stay until
-  /// overwritten (ids are never reused, so they never match again).
-  [[gnu::noinline]] void note(const ekf::Slam<T, B>& slam, const StepResult<T, B>& out, T watch_d2) {
+  /// After augment: the pairs of this scan's observed landmarks (out: kPaired and kNewLandmark) that
+  /// could pass the merge test later (above) are remembered as distinct. A removed landmark's pairs
+  /// stay until overwritten (ids are never reused, so they never match again).
+  [[gnu::noinline]] void note(const ekf::Slam<T, B>& slam, const StepResult<T, B>& out, T merge_d2, T gate_d2) {
+    const T watch_d2 = T(4) * merge_d2 > gate_d2 ? T(4) * merge_d2 : gate_d2;
     for (int a = 0; a < out.count; ++a) {  // <= kMaxObservations
       if (!observed(out, a)) continue;
       const int ja = slam.index_of(out.feature[a]);
