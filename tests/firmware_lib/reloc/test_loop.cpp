@@ -1,6 +1,6 @@
 // Loop closures scored, unique and confirmed (reloc/loop.hpp, node::LoopCheck): the set
 // likelihood on a hand-computed case; a drifted filter's closure held while pending, committed on
-// the confirming scan and then right; a correction that changes between scans not committed; an
+// the confirming scan and then right; two pairs the prior determines taken, a look-alike held; a correction that changes between scans not committed; an
 // agreeing closure left alone; a closure's duplicate merged (ids stable, P definite); the filter's
 // linearisation point, pose inflation and an update in rounds; bad input a Status with nothing
 // changed; no allocation; float and double agree.
@@ -107,6 +107,49 @@ TEST_CASE_TEMPLATE("loop: a drifted filter's closure is held, committed on confi
   CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kConsistent);
   CHECK(rig->out.loop.held == 0);
   for (int i = 0; i < rig->out.count; ++i) CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+}
+
+// Two old landmarks in view: too few for the alignment (loop_min_inliers 3), so no alternative. The
+// association's closure is taken when the prior determines each pair (no other landmark of the local
+// region within loop_margin_nats of it): pending, then committed with its own pairs. A look-alike
+// within the pose's uncertainty leaves the pair undetermined: held, not guessed.
+TEST_CASE_TEMPLATE("loop: two pairs the prior determines close the loop; a look-alike within the prior is held", T,
+                   float, double) {
+  const Pose2<double> truth{0, 0, 0}, believed{1.5, 0.5, 0.02};  // drifted 1.6 m
+  const std::vector<Eigen::Vector2d> seen{{8, 1}, {10, -3}};
+  const Mat3<T> P0 = Vec3<T>(T(1), T(1), T(0.01)).asDiagonal();
+  StepSettings<T> s = test::reloc_settings<T>();
+  s.loop_check = true;
+  s.loop_age = 1;
+  for (bool look_alike : {false, true}) {
+    CAPTURE(look_alike);
+    std::vector<Eigen::Vector2d> map = seen;
+    if (look_alike) map.emplace_back(8.8, 1.3);  // 0.85 m from (8, 1), where the drifted pose puts it
+    auto rig = test::make_known_map_rig<T, B>(map, s, believed, P0);
+    rig->obs.clear();
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);  // every landmark one review unseen: old
+    observe_from(seen, truth, rig->obs);                         // the look-alike is not there
+    REQUIRE(rig->obs.count == 2);
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(rig->out.loop.inliers == 0);  // no alignment of two observations
+    if (look_alike) {
+      CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kNoAlternative);
+      CHECK(rig->out.loop.held >= 1);
+      REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+      CHECK(rig->out.loop.verdict != reloc::LoopVerdict::kCommitted);
+      CHECK(position_error(rig->step, believed) < 0.01);  // nothing reached the filter
+      continue;
+    }
+    CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kPending);
+    CHECK(rig->out.loop.held == 2);
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+    CHECK(rig->out.loop.verdict == reloc::LoopVerdict::kCommitted);
+    for (int i = 0; i < rig->out.count; ++i) {
+      CHECK(rig->out.outcome[i] == node::Outcome::kPaired);
+      CHECK(rig->out.feature[i] == i);  // the association's own pairs: (8, 1) is 0, (10, -3) is 1
+    }
+    CHECK(position_error(rig->step, truth) < 0.1);
+  }
 }
 
 // A surveyed map (measured, not built by the robot) does not drift with it: re-observing it is

@@ -1,6 +1,6 @@
 // The relocaliser in the SLAM step (node/slam_step.hpp) and on the wire (RELOCALISE): a constructed
 // kidnap found in one scan and confirmed on the next; a wrong confirming scan sends the robot back to
-// lost with the covariance it had; a lost scan that cannot be aligned changes nothing but the state;
+// lost with the covariance it had, or, after a doubt, back to the pose it tracked; a lost scan that cannot be aligned changes nothing but the state;
 // the relocaliser off leaves the step as it was; a device given RELOCALISE re-sets its covariance and is
 // lost; no allocation.
 #include <doctest/doctest.h>
@@ -187,6 +187,50 @@ TEST_CASE_TEMPLATE("reloc step: a confirming scan that does not fit sends the ro
   CHECK(double(rig->step.slam().cov(2, 2)) == doctest::Approx(9.8).epsilon(1e-6));
   // And the scan after finds it where it is.
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.relocalised);
+  CHECK(position_error(rig->step, elsewhere) < 0.05);
+}
+
+TEST_CASE_TEMPLATE(
+    "reloc step: a jump after a doubt that the next scan does not bear out goes back to the tracked pose", T, float,
+    double) {
+  // Not lost: the pose it tracked is still the best it has. It stays tracked, doubted as it was, and
+  // the scan after is aligned pose-free again (before, it was lost and searched without a prior).
+  const auto map = test::reloc_map();
+  const Pose2<double> before{-5, -5, 0.3}, after{6, 4, 2.4}, elsewhere{-8, 6, -1.0};
+  StepSettings<T> s = test::reloc_settings<T>();
+  s.relocalise = true;
+  s.reloc_lost_nats = T(20);
+  auto rig = test::make_known_map_rig<T, B>(map, s, before, Mat3<T>::Identity() * T(1e-4));
+  observe_from(map, after, rig->obs);  // kidnapped; the filter is sure it is still at `before`
+  Pose2<T> tracked{};
+  Mat3<T> tracked_cov = Mat3<T>::Zero();
+  float doubt = 0;
+  for (int k = 0; k < 6 && !rig->out.reloc.relocalised; ++k) {
+    tracked = rig->step.slam().pose();
+    tracked_cov = rig->step.slam().pose_covariance();
+    doubt = rig->out.reloc.doubt;
+    REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  }
+  REQUIRE(rig->out.reloc.relocalised);
+  REQUIRE(rig->out.reloc.doubted);
+  REQUIRE(doubt >= 20);
+  // Carried again before the confirming scan: the jump is not borne out.
+  observe_from(map, elsewhere, rig->obs);
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.rejected);
+  CHECK(rig->step.localisation() == node::Localisation::kTracking);
+  CHECK(rig->out.reloc.doubt == doctest::Approx(doubt));
+  const Pose2<T> x = rig->step.slam().pose();
+  CHECK(std::abs(double(x.x - tracked.x)) < 1e-4);
+  CHECK(std::abs(double(x.y - tracked.y)) < 1e-4);
+  CHECK(std::abs(double(wrap_angle(x.theta - tracked.theta))) < 1e-4);
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) CHECK(double(rig->step.slam().cov(a, b)) == doctest::Approx(double(tracked_cov(a, b))));
+  }
+  // Still doubted: the scan after is aligned pose-free and found where it is.
+  REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
+  CHECK(rig->out.reloc.doubted);
   CHECK(rig->out.reloc.relocalised);
   CHECK(position_error(rig->step, elsewhere) < 0.05);
 }

@@ -47,4 +47,17 @@ using DefaultBounds = Bounds<24, 32, 5, 4000, 96>;
 using SmallControllerBounds = Bounds<16, 24, 4, 2000, 32>;
 using LargeControllerBounds = Bounds<24, 64, 5, 20000, 200>;
 
+/// The optional stages a configuration compiles in. The hypothesis window and clusters first
+/// (StepSettings::hypothesis_rivals, cluster_first: about 7 KB of Cortex-M4 code) are left out of the
+/// small controller's image, which cannot hold them and the rest in 128 KiB of flash; there
+/// node::SlamStep::configure refuses their options (kInvalidInput), on the device and on the host.
+template <class B>
+struct OptionalStages {
+  static constexpr bool kHypotheses = true;  ///< the hypothesis window and clusters first
+};
+template <>
+struct OptionalStages<SmallControllerBounds> {
+  static constexpr bool kHypotheses = false;
+};
+
 }  // namespace geojcbb

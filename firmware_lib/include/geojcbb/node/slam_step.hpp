@@ -55,6 +55,8 @@ class SlamStep {
   [[nodiscard]] Status configure(const StepSettings<T>& s) {
     // Every option's range, besides the preset (make_strategy refuses the same settings below).
     if (!in_range(s)) return Status::kInvalidInput;
+    // A configuration without the window and clusters first (OptionalStages) refuses their options.
+    if (!OptionalStages<B>::kHypotheses && (s.hypothesis_rivals > 0 || s.cluster_first)) return Status::kInvalidInput;
     double gate = 0;
     Status st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
@@ -207,10 +209,7 @@ class SlamStep {
         testing ? scan_evidence(obs, pred_, assoc_, map, reloc_.evidence_before(), view_, loop_align_.model) : T(0);
     const std::uint32_t t_tested = clock ? clock() : 0;
     out.counts.lost_test = testing ? t_tested - t_test : 0;
-    if (reloc_.confirm(cfg_, paired, evidence, assoc_.jointly_compatible, rs) &&
-        slam_.relocalise(slam_.pose(), reloc_.lost_covariance()) == Status::kOk) {  // validated when it was set
-      reloc_.rejected(rs);
-    }
+    if (reloc_.confirm(cfg_, paired, evidence, assoc_.jointly_compatible, rs)) unrelocate(rs);
     out.reloc = rs;
     out.counts.score = scratch_.ws.score.count;
     out.counts.step = (clock ? clock() : 0) - t0;
@@ -234,13 +233,20 @@ class SlamStep {
   [[gnu::noinline]] Status relocate(const Observations<T, B>& obs, RelocStats& rs) {
     Relocation<T> r;
     reloc_.fit(cfg_, obs, scratch_, ekf_ws_.Hp.data(), ekf_ws_.lm.data(), r);
-    const Mat3<T> lost = slam_.pose_covariance();
+    const Pose2<T> lost = slam_.pose();
+    const Mat3<T> lost_cov = slam_.pose_covariance();
     Status st = r.pairs >= 2 ? slam_.relocalise_fitted(r.x, r.Pobs, r.pairs, ekf_ws_.lm.data(), ekf_ws_.Hp.data())
                              : Status::kNotPositiveDefinite;
     if (st != Status::kOk) st = slam_.relocalise(r.x, r.cov);
     if (st != Status::kOk) return st;
-    reloc_.relocalised(cfg_, lost, rs);
+    reloc_.relocalised(cfg_, lost, lost_cov, rs);
     return Status::kOk;
+  }
+
+  /// A failed confirmation: the pose put back (Relocaliser::lost_pose, lost_covariance; both were
+  /// validated when set, so the filter takes them). Out of line: its pose stays out of step()'s frame.
+  [[gnu::noinline, gnu::cold]] void unrelocate(RelocStats& rs) {
+    if (slam_.relocalise(reloc_.lost_pose(slam_.pose()), reloc_.lost_covariance()) == Status::kOk) reloc_.rejected(rs);
   }
 
   /// The configured association on the prediction. With tentative_isolated, it sees only the
@@ -268,21 +274,27 @@ class SlamStep {
       window_.reset();
       return Status::kOk;
     }
-    const Status st = load_frozen(pred_, map, scratch_);
-    if (st != Status::kOk) {
-      window_.reset();
-      return st;
+    if constexpr (!OptionalStages<B>::kHypotheses) {  // not compiled in: configure() refused the options
+      (void)obs;
+      (void)hold;
+      return Status::kOk;
+    } else {
+      const Status st = load_frozen(pred_, map, scratch_);
+      if (st != Status::kOk) {
+        window_.reset();
+        return st;
+      }
+      const SeedModel<T> sm{slam_.pose(), slam_.pose_covariance(),
+                            reloc::SetModel<T>{cfg_.loop_detection_probability, cfg_.loop_unexplained_density},
+                            &loop_align_, cfg_.gate.individual};
+      if (cfg_.cluster_first && !window_.open()) {
+        window_stats_.regrouped += clusters_.run(cfg_, obs, pred_, map, scratch_, seeds_, sm, assoc_);
+      }
+      if (cfg_.hypothesis_rivals > 0) {
+        window_.run(cfg_, obs, pred_, map, scratch_, seeds_, sm, assoc_, window_stats_, close_, hold);
+      }
+      return Status::kOk;
     }
-    const SeedModel<T> sm{slam_.pose(), slam_.pose_covariance(),
-                          reloc::SetModel<T>{cfg_.loop_detection_probability, cfg_.loop_unexplained_density},
-                          &loop_align_, cfg_.gate.individual};
-    if (cfg_.cluster_first && !window_.open()) {
-      window_stats_.regrouped += clusters_.run(cfg_, obs, pred_, map, scratch_, seeds_, sm, assoc_);
-    }
-    if (cfg_.hypothesis_rivals > 0) {
-      window_.run(cfg_, obs, pred_, map, scratch_, seeds_, sm, assoc_, window_stats_, close_, hold);
-    }
-    return Status::kOk;
   }
 
   /// A scan that is not used (lost, not aligned): every observation kUnmatched, no counts.

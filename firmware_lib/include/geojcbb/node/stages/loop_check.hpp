@@ -5,9 +5,10 @@
 //          over them with the filter's pose as the prior; three hypotheses (no closure, the
 //          association's, the alignment's) by their log posteriors: the association is left as it
 //          is, has its disputed pairs held, or a Closure (the alignment's pairs, or the association's
-//          own with loop_min_inliers pairs) is confirmed and handed to the step to commit
+//          own with loop_min_inliers pairs, or two the prior determines) is confirmed and handed to
+//          the step to commit
 //   closure_rounds()  a committed closure's pairs ranked for the update's rounds (any stage's closure)
-// Bounds: one align() call, two fits and two scores per checked scan; the rewrite O(m n).
+// Bounds: one align() call, two fits and two scores per checked scan; the rewrite and determined() O(m n).
 // docs/relocalisation.md ("Loop closures").
 #pragma once
 
@@ -17,6 +18,7 @@
 #include <limits>
 
 #include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
 #include "geojcbb/reloc/loop.hpp"
 
@@ -138,10 +140,13 @@ class LoopCheck {
     const T margin = cfg.loop_margin_nats;
     // Three hypotheses, each by its log posterior: no closure, the association's, the alignment's.
     // One that leads both others by the margin is taken (the association's only with as many pairs
-    // as the alignment needs: fewer fix no pose); none: the disputed observations are held.
+    // as the alignment needs, or two the prior determines: one fixes no pose); none: the disputed
+    // observations are held.
     const T ll_align = alternative ? ls.ll_alignment : -std::numeric_limits<T>::infinity();
+    const bool few = !alternative && assoc_pairs >= 2 && assoc_pairs < cfg.loop_min_inliers &&
+                     determined(cfg, obs, pred, map, assoc, margin);
     const bool by_association =
-        assoc_pairs >= cfg.loop_min_inliers && ls.ll_association >= std::max(ls.ll_none, ll_align) + margin;
+        (few || assoc_pairs >= cfg.loop_min_inliers) && ls.ll_association >= std::max(ls.ll_none, ll_align) + margin;
     const bool by_alignment = ll_align >= std::max(ls.ll_none, ls.ll_association) + margin;
     if ((!alternative && fits_as_is) || (by_association && !reloc::distinct(x_assoc, xp, opt))) {
       ls.verdict = reloc::LoopVerdict::kConsistent;  // the association stands (a correction within 1 m, 0.2 rad)
@@ -190,6 +195,36 @@ class LoopCheck {
   }
 
  private:
+  /// Each pair of the association with an old landmark is determined by the prior: its landmark's
+  /// likelihood with the filter's covariance, N(z; h, H P H^T + R), leads every other candidate's of
+  /// the local region by `margin` nats (a drifted pose with one landmark in reach, not a look-alike
+  /// within the pose's uncertainty). Out of line: its loops stay out of run()'s frame.  O(m n)
+  [[gnu::noinline, gnu::cold]] bool determined(const AssociationConfig<T, B>& cfg, const Observations<T, B>& obs,
+                                               const Prediction<T, B>& pred, const MapView<T, B>& map,
+                                               const Association<T, B>& assoc, T margin) const {
+    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+      const int k = map.slot_of(assoc.feature[i]);
+      if (k < 0 || map.unseen(k) < cfg.loop_age || !map.confirmed(k) || map.id(k) < surveyed_end_) continue;
+      T ll_pair = -std::numeric_limits<T>::infinity(), ll_rival = -std::numeric_limits<T>::infinity();
+      for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
+        const Mat2<T> S = pred.C.block(a, a) + obs.R[static_cast<std::size_t>(i)];
+        const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+        if (!(det > T(0))) return false;
+        const Vec2<T> nu = innovation(obs.z[static_cast<std::size_t>(i)], pred.h[static_cast<std::size_t>(a)]);
+        const T d2 =
+            (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
+        const T ll = T(-0.5) * (d2 + std::log(det));
+        if (pred.id[static_cast<std::size_t>(a)] == assoc.feature[i]) {
+          ll_pair = ll;
+        } else {
+          ll_rival = std::max(ll_rival, ll);
+        }
+      }
+      if (!(ll_pair >= ll_rival + margin)) return false;
+    }
+    return true;
+  }
+
   reloc::LoopState<T> state_;
   FeatureId surveyed_end_ = 0;  ///< landmarks with a smaller id are surveyed (surveyed())
 };

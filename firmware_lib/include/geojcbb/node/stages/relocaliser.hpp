@@ -99,7 +99,7 @@ class Relocaliser {
   void reset() {
     state_ = Localisation::kTracking;
     doubt_ = T(0);
-    trust_prior_ = true;
+    from_doubt_ = false;
   }
   /// The user says so (RELOCALISE, SlamStep::lost): the pose covariance the user set is the prior.
   /// `relocalising` false (the relocaliser off, or not configured): nothing changes.
@@ -107,7 +107,7 @@ class Relocaliser {
     if (!relocalising) return;
     state_ = Localisation::kLost;
     doubt_ = T(0);
-    trust_prior_ = true;
+    from_doubt_ = false;
   }
   Localisation state() const { return state_; }
   /// The lost test's doubt (CUSUM, nats).
@@ -146,8 +146,7 @@ class Relocaliser {
     // against the map's half diagonal).
     const T spread2 = map.pose_cov(0, 0) + map.pose_cov(1, 1);
     const T half_diag2 = scratch.ws.n > 0 ? T(0.25) * (hi - lo).squaredNorm() : T(0);
-    if (doubted || !trust_prior_ || !(spread2 < half_diag2) ||
-        !reloc::set_prior(map.pose(), map.pose_covariance(), align)) {
+    if (doubted || !(spread2 < half_diag2) || !reloc::set_prior(map.pose(), map.pose_covariance(), align)) {
       align.has_prior = false;
     }
     rs.prior = align.has_prior;
@@ -197,11 +196,14 @@ class Relocaliser {
     if (out.pairs >= 2) out.Pobs = Pobs * cfg.reloc_inflation;  // else not used (relocalise with cov)
     out.cov = a.cov * cfg.reloc_inflation;
   }
-  /// The step applied the Relocation; `lost_cov` is the pose covariance it had before.
-  void relocalised(const AssociationConfig<T, B>& cfg, const Mat3<T>& lost_cov, RelocStats& rs) {
+  /// The step applied the Relocation; `lost` and `lost_cov` are the pose and covariance it had before.
+  void relocalised(const AssociationConfig<T, B>& cfg, const Pose2<T>& lost, const Mat3<T>& lost_cov, RelocStats& rs) {
+    lost_pose_ = lost;
     lost_cov_ = lost_cov;
     rs.relocalised = true;
-    if (rs.doubted) trust_prior_ = false;  // a failed confirmation: lost, pose-free (the prior was doubted)
+    from_doubt_ = rs.doubted;  // a failed confirmation goes back to the tracked pose (rejected())
+    doubt_lost_ = doubt_;
+    doubt_from_lost_ = doubt_from_;
     doubt_ = T(0);
     state_ = cfg.reloc_confirm_scans > 0 ? Localisation::kConfirming : Localisation::kTracking;
     rs.found = state_ == Localisation::kTracking;
@@ -214,7 +216,8 @@ class Relocaliser {
   /// tracking with reloc_lost_nats > 0: doubt = min(2 h, max(0, doubt - evidence)), a CUSUM (Page's
   /// test) of the evidence against the tracked pose; from h = reloc_lost_nats on, the next scans are
   /// aligned pose-free (localise). The cap bounds the scans it takes to trust the pose again.
-  /// @return true when the confirmation failed: the step puts the pose covariance back to
+  /// @return true when the confirmation failed: the step puts the pose back to lost_pose() (a
+  /// relocalisation after a doubt: the pose it tracked; told lost: where it is) with
   /// lost_covariance() and, if the filter takes it, calls rejected().
   [[nodiscard]] bool confirm(const AssociationConfig<T, B>& cfg, int paired, T evidence, bool jointly_compatible,
                              RelocStats& rs) {
@@ -240,10 +243,17 @@ class Relocaliser {
     return reject;
   }
   const Mat3<T>& lost_covariance() const { return lost_cov_; }
+  /// Where a failed confirmation puts the pose: the tracked pose when the relocalisation came from
+  /// a doubt (one scan did not bear the jump out: tracked again, with the doubt it had, so the next
+  /// scan is aligned pose-free again), else `current` (lost: the relocaliser searches on).
+  Pose2<T> lost_pose(const Pose2<T>& current) const { return from_doubt_ ? lost_pose_ : current; }
   void rejected(RelocStats& rs) {
-    state_ = Localisation::kLost;
+    state_ = from_doubt_ ? Localisation::kTracking : Localisation::kLost;
+    doubt_ = from_doubt_ ? doubt_lost_ : T(0);
+    if (from_doubt_) doubt_from_ = doubt_from_lost_;  // the landmarks mapped since the doubt are still no evidence
     rs.rejected = true;
     rs.state = state_;
+    rs.doubt = static_cast<float>(doubt_);
   }
 
  private:
@@ -252,7 +262,10 @@ class Relocaliser {
   T doubt_ = T(0);            ///< the lost test's CUSUM [nats] (confirm)
   FeatureId doubt_from_ = 0;  ///< the first id mapped since this scan began, or (doubt_ > 0) since the doubt did
   bool skip_confirm_ = false;
-  bool trust_prior_ = true;  ///< lost by being told (the pose covariance is the prior), not after a doubt
+  bool from_doubt_ = false;        ///< the last relocalisation came from a doubt, not from being lost
+  T doubt_lost_ = T(0);            ///< the doubt when it did
+  FeatureId doubt_from_lost_ = 0;  ///< and doubt_from_
+  Pose2<T> lost_pose_{};           ///< the pose before the last relocalisation
   Mat3<T> lost_cov_ = Mat3<T>::Identity();
 };
 
