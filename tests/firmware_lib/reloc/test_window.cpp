@@ -2,7 +2,8 @@
 // of landmarks opens it; with the disputed observations held and no hypothesis leading it never
 // exceeds its bounds and ends having committed nothing; a second cluster in view resolves the row
 // and the pose is right after; bad input a Status with nothing changed; no allocation; float and
-// double agree. Clusters first (cluster_first): a row paired shifted is paired as a unit, right.
+// double agree. Clusters first (cluster_first): a row paired shifted is paired as a unit, right. A
+// configuration that compiles both out (the small controller's) refuses their options.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -247,4 +248,31 @@ TEST_CASE("clusters first: a lone observation is the gate's business; a cluster 
   REQUIRE(rig->step.step(rig->obs, rig->out) == Status::kOk);
   CHECK(rig->out.window.regrouped == 0);
   CHECK(rig->out.window.verdict == reloc::WindowVerdict::kNone);
+}
+
+// The small controller's image leaves the window and clusters first out (OptionalStages): its step
+// refuses their options, keeps the settings it had, and steps as before; the default configuration
+// takes them.
+TEST_CASE("window: a configuration without the window refuses its options and keeps its settings") {
+  using T = float;
+  using Small = SmallControllerBounds;
+  static_assert(!OptionalStages<Small>::kHypotheses && OptionalStages<DefaultBounds>::kHypotheses);
+  auto small = std::make_unique<node::SlamStep<T, Small>>();
+  StepSettings<T> s = test::reloc_settings<T>();
+  REQUIRE(small->configure(s) == Status::kOk);
+  StepSettings<T> window = s;
+  window.hypothesis_rivals = 2;
+  StepSettings<T> clusters = s;
+  clusters.cluster_first = true;
+  CHECK(small->configure(window) == Status::kInvalidInput);
+  CHECK(small->configure(clusters) == Status::kInvalidInput);
+  CHECK(small->configured());
+  REQUIRE(small->reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
+  Observations<T, Small> obs;
+  node::StepResult<T, Small> out;
+  CHECK(small->step(obs, out) == Status::kOk);
+  CHECK(out.window.verdict == reloc::WindowVerdict::kNone);
+  auto dflt = std::make_unique<node::SlamStep<T, B>>();
+  CHECK(dflt->configure(window) == Status::kOk);
+  CHECK(dflt->configure(clusters) == Status::kOk);
 }
