@@ -34,8 +34,8 @@ extern "C" {
  * the buffer given is large and aligned enough. Declare storage as, for example:
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
-#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28752
-#define GEOJCBB_SLAM_STORAGE_SIZE 122736
+#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28784
+#define GEOJCBB_SLAM_STORAGE_SIZE 122784
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */

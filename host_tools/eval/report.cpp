@@ -11,6 +11,18 @@
 namespace geojcbb::host {
 
 void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
+  const SubmapStats& m = r.submaps;
+  submaps.maps += m.maps;
+  submaps.offered += m.offered;
+  submaps.fused += m.fused;
+  submaps.declined += m.declined;
+  submaps.refused += m.refused;
+  submaps.wrong += m.wrong;
+  submaps.landmarks.insert(submaps.landmarks.end(), m.landmarks.begin(), m.landmarks.end());
+  submaps.worst_step_s.insert(submaps.worst_step_s.end(), m.worst_step_s.begin(), m.worst_step_s.end());
+  for (std::size_t k = 1; k < m.worst_step_s.size() && m.worst_step_s[0] > 0; ++k) {
+    worst_step_ratio = std::max(worst_step_ratio, m.worst_step_s[k] / m.worst_step_s[0]);
+  }
   score.add(r.score);
   group_score.add(r.group_score);
   for (const StepRecord& k : r.steps) scan_ms.push_back(1e3 * k.assoc_s);
@@ -254,6 +266,26 @@ svg::Panel path_map_panel(const std::string& title, const RunResult& r, const st
   }
   p.series = {tl, truth, est, el, sl};
   return p;
+}
+
+void print_submaps(const std::vector<std::string>& names, const std::vector<RunAggregate>& agg, std::FILE* f) {
+  bool any = false;
+  for (const RunAggregate& a : agg) any = any || a.submaps.maps > 0;
+  if (!any) return;
+  std::fprintf(f,
+               "\nLocal maps joined on the host (docs/submaps.md; summed over the runs)\n"
+               "| strategy | local maps | landmarks per map (max) | offered | fused | declined | joins refused | "
+               "wrong joins | global map | slowest step / first map's |\n"
+               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (std::size_t k = 0; k < agg.size() && k < names.size(); ++k) {
+    const SubmapStats& m = agg[k].submaps;
+    if (m.maps == 0) continue;
+    int most = 0;
+    for (int n : m.landmarks) most = std::max(most, n);
+    const double global = agg[k].runs > 0 ? double(agg[k].landmarks) / agg[k].runs : 0;  // per run
+    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %.2f |\n", names[k].c_str(), m.maps, most,
+                 m.offered, m.fused, m.declined, m.refused, m.wrong, global, agg[k].worst_step_ratio);
+  }
 }
 
 }  // namespace geojcbb::host

@@ -71,6 +71,13 @@ void RunScorer::removed(FeatureId id) {
   feature_truth_[static_cast<std::size_t>(id)] = kRemoved;
 }
 
+void RunScorer::handed_over(FeatureId id) {
+  const int t = truth_of(id);
+  if (t == kRemoved || t == kUnknown) return;
+  if (t >= 0) --mapped_[static_cast<std::size_t>(t)];
+  feature_truth_[static_cast<std::size_t>(id)] = kRemoved;
+}
+
 void RunScorer::pose(double t_s, const Pose2<double>& truth, const Pose2<double>& estimate, const Eigen::Matrix3d& P) {
   StepRecord r;
   r.t_s = t_s;

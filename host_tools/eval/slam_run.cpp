@@ -34,7 +34,70 @@ struct SlamSession::State {
   std::unique_ptr<RunScorer> scorer;
   std::vector<int> truth;         // scratch: the scan's truths
   std::vector<FeatureId> paired;  // scratch: the scan's pairings
+  // Sequential map joining (RunOptions::submaps).
+  std::unique_ptr<GlobalMap> global;
+  std::vector<int> id_truth;  // landmark id -> its truth, kept when its local map is handed over
+  double map_worst_s = 0;     // the current local map's slowest step
+  double radius_m = 0;        // r + d
+  /// The pose and its covariance in the world: the local map's, through the global map's base.
+  void world_pose(Pose2<double>& x, Eigen::Matrix3d& P) const {
+    const ekf::Slam<double, EB>& slam = step.slam();
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
+    x = slam.pose();
+    if (global) global->to_global(slam.pose(), Eigen::Matrix3d(P), x, P);
+  }
+  /// The local map handed over: joined into the global map, its landmarks gone from the scorer's
+  /// map, the step restarted at the robot's pose.
+  void hand_over();
 };
+
+void SlamSession::State::hand_over() {
+  RunScorer& sc = *scorer;
+  SubmapStats& st = sc.result().submaps;
+  const ekf::Slam<double, EB>& slam = step.slam();
+  const Submap m = submap_of(slam, st.maps);
+  id_truth.resize(sc.ids(), RunScorer::kUnknown);
+  for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
+  const JoinResult joined = global->join(m);
+  ++st.maps;
+  st.offered += joined.offered;
+  st.fused += joined.fused;
+  st.declined += joined.declined;
+  st.refused += joined.refused;
+  for (const auto& p : joined.pairs) {
+    const int a = id_truth[static_cast<std::size_t>(p.first)], b = id_truth[static_cast<std::size_t>(p.second)];
+    st.wrong += a >= 0 && b >= 0 && a != b;
+  }
+  st.landmarks.push_back(m.landmarks());
+  st.worst_step_s.push_back(map_worst_s);
+  map_worst_s = 0;
+  check(step.restart(), "restart");
+  for (FeatureId id : m.ids) {  // the landmarks not carried into the next map leave the scorer's map
+    if (slam.index_of(id) < 0) sc.handed_over(id);
+  }
+  if (!opt.submap_seed) return;
+  std::vector<FeatureId> carried(static_cast<std::size_t>(slam.landmarks()));
+  for (int j = 0; j < slam.landmarks(); ++j) carried[static_cast<std::size_t>(j)] = slam.id(j);
+  const Seed seed = global->seed(radius_m, DefaultBounds::kMaxCandidates - slam.landmarks(), carried);
+  std::vector<FeatureId> ids;
+  ids.reserve(seed.first_ids.size());
+  const int first = slam.landmarks();
+  std::vector<Eigen::Matrix2d> cross;
+  cross.reserve(seed.first_ids.size());
+  for (std::size_t k = 0; k < seed.first_ids.size(); ++k) {
+    cross.clear();
+    for (std::size_t q = 0; q < k; ++q)
+      cross.push_back(seed.P.block<2, 2>(2 * static_cast<Eigen::Index>(q), 2 * static_cast<Eigen::Index>(k)));
+    FeatureId id = -1;
+    const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
+    const Status sst = step.seed_landmark(seed.x.segment<2>(r), seed.P.block<2, 2>(r, r), cross.data(), first, id);
+    check(sst, "seed_landmark");
+    ids.push_back(id);
+    sc.added(id, id_truth[static_cast<std::size_t>(seed.first_ids[k])]);
+  }
+  global->seeded(seed, ids);
+}
 
 // The ground-truth association (the step's association override): each observation of a mapped
 // landmark is paired with the candidate made from that landmark (the most-seen one when there are
@@ -119,6 +182,9 @@ StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sen
   ss.min_range_m = sensor.min_range_m + opt.view_margin_m;
   ss.max_range_m = sensor.max_range_m - opt.view_margin_m;
   ss.half_fov_rad = 0.5 * sensor.fov_rad - 3 * sensor.sigma_bearing_rad;
+  if (opt.submaps && ss.submap_landmarks == 0 && ss.submap_distance_m == 0 && ss.submap_scans == 0) {
+    ss.submap_landmarks = kDefaultSubmapLandmarks;
+  }
   if (!opt.known_map.empty()) {  // a fixed map: nothing added, nothing removed (known landmarks are confirmed
                                  // and the evidence never removes them, ekf::LandmarkPolicy)
     ss.augment = false;
@@ -136,6 +202,15 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   check(s.step.configure(ss), "configure");
   s.scorer = std::make_unique<RunScorer>(true_landmarks, opt.landmark_group);
   check(s.step.reset(x0, P0), "reset");
+  if (opt.submaps) {
+    JoinOptions join = opt.join;
+    if (!parse_preset(opt.join_preset.c_str(), join.preset)) {
+      throw std::invalid_argument("unknown join preset '" + opt.join_preset + "' (" + kPresetsHelp + ")");
+    }
+    join.confidence = ss.confidence;
+    s.radius_m = ss.local_radius_m;
+    s.global = std::make_unique<GlobalMap>(join);
+  }
   const double v = opt.known_map_sigma_m * opt.known_map_sigma_m;
   for (std::size_t k = 0; k < opt.known_map.size(); ++k) {
     FeatureId id = -1;
@@ -147,7 +222,12 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
 
 SlamSession::~SlamSession() = default;
 
-Pose2<double> SlamSession::pose() const { return st_->step.slam().pose(); }
+Pose2<double> SlamSession::pose() const {
+  Pose2<double> x;
+  Eigen::Matrix3d P;
+  st_->world_pose(x, P);
+  return x;
+}
 
 void SlamSession::predict(double v_mps, double w_radps, double dt_s, double sigma_v_mps, double sigma_w_radps) {
   check(st_->step.predict(ekf::Odometry<double>{v_mps, w_radps, dt_s, sigma_v_mps, sigma_w_radps}), "predict");
@@ -180,6 +260,7 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   const node::AssociationOverride<double, EB> by_truth{oracle_associate, &oracle};
   check(s.step.step(s.obs, s.result, steady_ns, s.opt.oracle ? &by_truth : nullptr), "step");
   const node::StepResult<double, EB>& r = s.result;
+  s.map_worst_s = std::max(s.map_worst_s, 1e-9 * double(r.counts.step));
   const node::RelocStats& reloc = r.reloc;
   res.loop_commits += r.loop.verdict == reloc::LoopVerdict::kCommitted;
   res.loop_held_scans += r.loop.verdict == reloc::LoopVerdict::kPending;
@@ -245,12 +326,14 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
       if (!alive[id]) sc.removed(static_cast<FeatureId>(id));
     }
   }
-  if (truth == nullptr) return;
-  const ekf::Slam<double, EB>& slam = s.step.slam();
+  if (truth == nullptr) {
+    if (s.global && r.submap_due) s.hand_over();
+    return;
+  }
+  Pose2<double> x;
   Eigen::Matrix3d P;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) P(a, b) = slam.cov(a, b);
-  sc.pose(t_s, *truth, slam.pose(), P);
+  s.world_pose(x, P);
+  sc.pose(t_s, *truth, x, P);
   res.steps.back().lost = reloc.state == node::Localisation::kLost;
   res.steps.back().declared_found = reloc.found;
   int paired = 0;
@@ -264,10 +347,22 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   res.steps.back().tp = scan_tp;
   res.steps.back().fp = scan_fp;
   res.steps.back().assoc_s = assoc_s;
+  if (s.global && r.submap_due) s.hand_over();
 }
 
 RunResult SlamSession::finish() {
   State& s = *st_;
+  if (s.global) {  // the last local map joined too; the map is the global one
+    s.hand_over();
+    RunResult res = s.scorer->finish();
+    res.landmarks = s.global->landmarks();
+    for (int k = 0; k < res.landmarks; ++k) {
+      const int t = s.id_truth[static_cast<std::size_t>(s.global->first_id(k))];
+      res.map.push_back({s.global->landmark(k).x(), s.global->landmark(k).y(), t});
+      res.spurious_in_map += t < 0;
+    }
+    return res;
+  }
   RunResult res = s.scorer->finish();
   const ekf::Slam<double, EB>& slam = s.step.slam();
   res.landmarks = slam.landmarks();

@@ -108,6 +108,10 @@ class Options(TypedDict, total=False):
     hypothesis_hold: bool  # default 0
     cluster_first: bool  # default 0
     evict_when_full: bool  # default 0
+    submap_landmarks: int  # default 0
+    submap_distance_m: float  # default 0
+    submap_scans: int  # default 0
+    submap_carry: bool  # default 1
     # END GENERATED: option keywords
 
 

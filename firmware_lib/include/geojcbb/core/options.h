@@ -133,7 +133,15 @@
   X(BOOL, cluster_first, 0, (ANY, 0, 0), "", "--cluster-first", \
     "pair each cluster of observations (within dbscan_eps_m) as a unit first, its members at that posterior") \
   X(BOOL, evict_when_full, 0, (ANY, 0, 0), "", "--evict-when-full", \
-    "a full map makes room for a new landmark: the least-seen landmark beyond r + d goes (the farthest of equals)")
+    "a full map makes room for a new landmark: the least-seen landmark beyond r + d goes (the farthest of equals)") \
+  X(U32, submap_landmarks, 0, (CLOSED, 0, 32767), "", "--submap-landmarks", \
+    "the local map is closed (handed over, the next begun at the robot) after a scan that leaves it this many landmarks (0: off)") \
+  X(REAL, submap_distance_m, 0, (GE, 0, 0), "m", "--submap-distance", \
+    "the local map is closed after a scan once the robot has travelled this far in it (0: off)") \
+  X(U32, submap_scans, 0, (CLOSED, 0, 1000000), "scans", "--submap-scans", \
+    "the local map is closed after this many scans (0: off)") \
+  X(BOOL, submap_carry, 1, (ANY, 0, 0), "", "--submap-carry", \
+    "the next local map begins with the closed one's confirmed landmarks of the local region, in its frame (off: empty)")
 /* clang-format on */
 
 #endif /* GEOJCBB_CORE_OPTIONS_H */

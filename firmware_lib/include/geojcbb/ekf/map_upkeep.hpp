@@ -185,4 +185,60 @@ void Slam<T, B>::move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kep
   }
 }
 
+template <typename T, class B>
+void Slam<T, B>::reanchor() {
+  const T px = x_[0], py = x_[1], c = std::cos(x_[2]), sn = std::sin(x_[2]);
+  Mat2<T> Rt;  // R(theta)^T
+  Rt << c, sn, -sn, c;
+  const Mat3<T> Prr = P_.template block<3, 3>(0, 0);
+  // d l' / d pose for landmark a: [-R^T, (l'_y, -l'_x)] with l' = R^T (l - p).
+  auto jacobian = [&](int a) {
+    const int la = Layout::landmark(a);
+    const Vec2<T> d = Rt * Vec2<T>(x_[la] - px, x_[la + 1] - py);
+    Mat23<T> J;
+    J.template block<2, 2>(0, 0) = -Rt;
+    J(0, 2) = d.y();
+    J(1, 2) = -d.x();
+    return J;
+  };
+  const int n = landmarks();
+  for (int a = 0; a < n; ++a) {  // <= kMaxLandmarks
+    const int la = Layout::landmark(a);
+    const Mat23<T> Ja = jacobian(a);
+    const Mat32<T> Pra = P_.template block<3, 2>(0, la);
+    for (int b = a; b < n; ++b) {  // <= kMaxLandmarks
+      const int lb = Layout::landmark(b);
+      const Mat23<T> Jb = jacobian(b);
+      const Mat32<T> Prb = P_.template block<3, 2>(0, lb);
+      const Mat2<T> Pab = P_.template block<2, 2>(la, lb);
+      const Mat2<T> Q = Ja * Prr * Jb.transpose() + Ja * Prb * Rt.transpose() + Rt * Pra.transpose() * Jb.transpose() +
+                        Rt * Pab * Rt.transpose();
+      if (a == b) {
+        P_.template set_sym<2>(la, symmetric_part(Q));
+      } else {
+        P_.template set_block<2, 2>(la, lb, Q);
+      }
+    }
+  }
+  for (int a = 0; a < n; ++a) {  // <= kMaxLandmarks: the means and first estimates, the pose rows
+    const int la = Layout::landmark(a);
+    const Vec2<T> l = Rt * Vec2<T>(x_[la] - px, x_[la + 1] - py);
+    x_[la] = l.x();
+    x_[la + 1] = l.y();
+    LandmarkRecord<T>& r = book_[a];
+    const Vec2<T> l0 = Rt * Vec2<T>(r.l0[0] - px, r.l0[1] - py);
+    r.l0[0] = l0.x();
+    r.l0[1] = l0.y();
+    Mat2<T> P0;
+    P0 << r.P0[0], r.P0[1], r.P0[1], r.P0[2];
+    P0 = Rt * P0 * Rt.transpose();
+    r.P0[0] = P0(0, 0);
+    r.P0[1] = P0(0, 1);
+    r.P0[2] = P0(1, 1);
+    P_.template set_block<3, 2>(0, la, Mat32<T>::Zero());
+  }
+  x_[0] = x_[1] = x_[2] = T(0);
+  updated_ = false;
+}
+
 }  // namespace geojcbb::ekf

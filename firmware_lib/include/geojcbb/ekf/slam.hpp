@@ -165,6 +165,31 @@ class Slam {
     return Status::kOk;
   }
 
+  /// Starts the next local map (sequential map joining with conditionally independent local maps,
+  /// Pinies and Tardos 2008; docs/submaps.md): the robot's pose becomes the new map's origin,
+  /// (0, 0, 0) with covariance P0 (3x3, symmetric positive definite), uncorrelated with the map.
+  /// Landmarks keep[0 .. kept) (increasing indices) stay, expressed in the new frame,
+  /// l' = R(theta)^T (l - p), their covariance J [P_rr P_rl; P_lr P_ll] J^T (J with respect to the
+  /// pose and the landmark): their estimate conditioned on the new origin. The rest are gone: the
+  /// closed map must have been read (handed over) before. The ids go on from the closed map's (a
+  /// kept landmark keeps its id, so the host knows the two maps share it). The filter options and
+  /// the mount are kept.  O(kept^2), in place.
+  /// @return as reset(); kInvalidInput for kept out of range or indices not increasing in range.
+  ///         Nothing changes unless kOk.
+  [[nodiscard]] Status restart(const Mat3<T>& P0, const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
+    const Status s = check_pose_prior(Pose2<T>{T(0), T(0), T(0)}, P0);
+    if (s != Status::kOk) return s;
+    if (kept < 0 || kept > landmarks()) return Status::kInvalidInput;
+    for (int k = 0; k < kept; ++k) {  // <= kMaxLandmarks
+      if (keep[k] < 0 || keep[k] >= landmarks() || (k > 0 && keep[k] <= keep[k - 1])) return Status::kInvalidInput;
+    }
+    move_kept(keep, kept);
+    book_.retain(keep, kept);
+    reanchor();
+    P_.template set_sym<3>(0, symmetric_part(P0));
+    return Status::kOk;
+  }
+
   /// Relocalisation (pose-free consistency): the robot was carried somewhere unknown. The
   /// pose estimate becomes x with covariance Pxx and its correlation with the map is removed (the
   /// map no longer says anything about where the robot is); the map and its covariance are kept.
@@ -717,6 +742,34 @@ class Slam {
     return Status::kOk;
   }
 
+  /// A landmark of the global map given to a new local map (docs/submaps.md, seeding): at l in this
+  /// map's frame with covariance Pll; cross[k] (2x2) its covariance with landmark first + k for
+  /// k < landmarks() - first (the ones seeded before it), uncorrelated with the pose and the others.
+  /// It starts confirmed. The joint covariance is the caller's to make positive definite (a
+  /// marginal of its own); the new block is checked, as augment() does.
+  /// @param[out] id  the new landmark's id
+  /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll; kInvalidInput for first out of range;
+  ///         kCapacityExceeded. No state changes unless kOk.  O(n)
+  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, const Mat2<T>* cross, int first,
+                                     FeatureId& id) {
+    if (first < 0 || first > landmarks() || (first < landmarks() && cross == nullptr)) return Status::kInvalidInput;
+    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+    for (int k = first; k < landmarks(); ++k) {  // <= kMaxLandmarks
+      if (!cross[k - first].allFinite()) return Status::kNonFinite;
+    }
+    const Mat2<T> Pll_sym = symmetric_part(Pll);
+    if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
+    if (book_.full()) return Status::kCapacityExceeded;
+    const int n = dim();
+    P_.append_uncorrelated(n, Pll_sym);
+    for (int k = first; k < landmarks(); ++k) {  // <= kMaxLandmarks
+      P_.template set_block<2, 2>(Layout::landmark(k), n, cross[k - first]);
+    }
+    id = add_landmark(l);
+    book_[landmarks() - 1].flags = kConfirmedFlag;
+    return Status::kOk;
+  }
+
   /// Landmark bookkeeping after a scan's update and augment: every landmark of `pred` (this scan's
   /// prediction) whose predicted measurement is in `view` was expected; paired by `assoc` (with
   /// observation i of `obs`), it gains a hit, otherwise a miss, and its log-odds of existence the
@@ -785,6 +838,10 @@ class Slam {
   /// source index is at or after its destination, so nothing is overwritten before it is read.
   /// Out of line so review()'s frame (which holds keep) stays within the 512-byte budget.
   [[gnu::noinline]] void move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kept);
+  /// restart()'s change of frame: every landmark, its covariance (with the pose's, then zeroed) and
+  /// its first estimate expressed in the robot's frame, the pose at the origin. Each landmark block
+  /// is read once, before it is written; the pose rows only at the end.  O(n^2)
+  [[gnu::noinline]] void reanchor();
   /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
   /// record. @return its id
   FeatureId add_landmark(const Vec2<T>& l, bool known = false) {

@@ -48,6 +48,9 @@ class SlamStep {
   static constexpr int kClosureRounds = 3;
   static constexpr int kMaxMergesPerScan = DuplicateMerge<T, B>::kMaxMergesPerScan;
   static constexpr int kMaxMovers = Tentative<T, B>::kMaxMovers;
+  /// The next local map's origin variance on each of x, y, theta (restart): (1 mm)^2 and (1 mrad)^2,
+  /// the origin known (it is the map's frame) up to what keeps the covariance definite in float.
+  static constexpr T kOriginVariance = T(1e-6);
 
   /// Builds the strategy's configuration and the augmentation gate.
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
@@ -106,15 +109,39 @@ class SlamStep {
   /// @return the statuses of ekf::Slam::reset.
   [[nodiscard]] Status reset(const Pose2<T>& x0, const Mat3<T>& P0) {
     const Status st = slam_.reset(x0, P0, filter_);
-    if (st == Status::kOk) {
-      reloc_.reset();
-      merge_.reset();
-      tentative_.reset();
-      window_.reset();
-      loop_.new_map();
-    }
+    if (st == Status::kOk) begin_map();
     return st;
   }
+  /// The next local map, once the closed one has been handed over (StepResult::submap_due):
+  /// ekf::Slam::restart, the robot's pose its origin with kOriginVariance, the ids going on. With
+  /// submap_carry it keeps the confirmed landmarks of the last scan's local region (r + d, at most
+  /// kMaxCandidates), so consecutive maps share them; without, it begins empty. The stages start
+  /// again as after reset(). @return kOk (the origin's covariance and the kept indices are valid).
+  [[nodiscard]] Status restart() {
+    std::int16_t keep[B::kMaxLandmarks];
+    int kept = 0;
+    if (cfg_.submap_carry) {
+      bool mark[B::kMaxLandmarks] = {};
+      for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
+        const int j = slam_.index_of(pred_.id[a]);
+        if (j >= 0 && slam_.confirmed(j)) mark[j] = true;
+      }
+      for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
+        if (mark[j]) keep[kept++] = static_cast<std::int16_t>(j);
+      }
+    }
+    const Status st = slam_.restart(Mat3<T>::Identity() * kOriginVariance, keep, kept);
+    if (st == Status::kOk) begin_map();
+    return st;
+  }
+  /// A landmark of the global map seeded into the new local map (ekf::Slam::seed_landmark).
+  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, const Mat2<T>* cross, int first,
+                                     FeatureId& id) {
+    return slam_.seed_landmark(l, Pll, cross, first, id);
+  }
+  /// Metres travelled and scans taken since the local map began (reset, restart).
+  T travelled_m() const { return travelled_m_; }
+  int scans_in_map() const { return scans_in_map_; }
   /// ekf::Slam::relocalise: the pose re-initialised (robot carried), the map kept.
   [[nodiscard]] Status relocalise(const Pose2<T>& x, const Mat3<T>& Pxx) { return slam_.relocalise(x, Pxx); }
 
@@ -135,10 +162,18 @@ class SlamStep {
   }
 
   /// @return the statuses of ekf::Slam::predict.
-  [[nodiscard]] Status predict(const ekf::Odometry<T>& u) { return slam_.predict(u); }
+  [[nodiscard]] Status predict(const ekf::Odometry<T>& u) {
+    const Status st = slam_.predict(u);
+    if (st == Status::kOk) travelled_m_ += std::abs(u.v_mps * u.dt_s);
+    return st;
+  }
   /// A pose increment with its covariance (wheel odometry, a vehicle model).
   /// @return the statuses of ekf::Slam::predict.
-  [[nodiscard]] Status predict(const ekf::PoseIncrement<T>& u) { return slam_.predict(u); }
+  [[nodiscard]] Status predict(const ekf::PoseIncrement<T>& u) {
+    const Status st = slam_.predict(u);
+    if (st == Status::kOk) travelled_m_ += std::sqrt(u.dx_m * u.dx_m + u.dy_m * u.dy_m);
+    return st;
+  }
 
   /// One scan. `clock` may be nullptr; `override` (nullptr: none) replaces the association.
   /// @return kOk; kInvalidInput when not configured (or an override's count mismatch); the statuses
@@ -149,6 +184,8 @@ class SlamStep {
                             const AssociationOverride<T, B>* override = nullptr) {
     if (!configured_) return Status::kInvalidInput;
     const std::uint32_t t0 = clock ? clock() : 0;
+    if (scans_in_map_ < std::numeric_limits<int>::max()) ++scans_in_map_;
+    out.submap_due = false;
     scratch_.ws.score = {clock, 0};  // the posterior scoring's count (set_log_likelihood)
     const MapView<T, B> map{slam_, policy_};
     RelocStats rs;
@@ -210,6 +247,7 @@ class SlamStep {
     const std::uint32_t t_tested = clock ? clock() : 0;
     out.counts.lost_test = testing ? t_tested - t_test : 0;
     if (reloc_.confirm(cfg_, paired, evidence, assoc_.jointly_compatible, rs)) unrelocate(rs);
+    out.submap_due = submap_due();
     out.reloc = rs;
     out.counts.score = scratch_.ws.score.count;
     out.counts.step = (clock ? clock() : 0) - t0;
@@ -220,6 +258,30 @@ class SlamStep {
   T augmentation_gate() const { return gate_; }
 
  private:
+  /// A map begins (reset, restart): the stages and the closing rule's counts start again.
+  void begin_map() {
+    reloc_.reset();
+    merge_.reset();
+    tentative_.reset();
+    window_.reset();
+    loop_.new_map();
+    travelled_m_ = T(0);
+    scans_in_map_ = 0;
+    added_in_map_ = 0;
+  }
+  /// The closing rule of the local map (submap_landmarks, submap_distance_m, submap_scans; 0 each
+  /// off), after a tracked scan with no closure pending: a map is handed over at a settled pose.
+  bool submap_due() const {
+    if (reloc_.state() != Localisation::kTracking || loop_.pending() || window_.open()) return false;
+    // The fill level counts every landmark (the device's capacity), but only once the map has added
+    // one of its own: a map that began fuller (carried over, seeded) is not closed at once.
+    const auto landmarks = static_cast<std::uint32_t>(slam_.landmarks());
+    const auto scans = static_cast<std::uint32_t>(scans_in_map_);
+    return (cfg_.submap_landmarks > 0 && landmarks >= cfg_.submap_landmarks && added_in_map_ > 0) ||
+           (cfg_.submap_distance_m > T(0) && travelled_m_ >= cfg_.submap_distance_m) ||
+           (cfg_.submap_scans > 0 && scans >= cfg_.submap_scans);
+  }
+
   /// The relocaliser's part: lost -> the scan aligned; an accepted pose applied to the filter with
   /// the pose's correlation to the landmarks it was fitted to, or, when the filter refuses that, as
   /// the fit's own covariance. The sensitivities go through the update's scratch (ekf_ws_: Hp, lm),
@@ -372,6 +434,7 @@ class SlamStep {
           added = slam_.augment(obs.z[i], obs.R[i], id);
         }
         if (added == Status::kOk) {
+          added_in_map_ += added_in_map_ < std::numeric_limits<int>::max();
           out.outcome[i] = Outcome::kNewLandmark;
           out.feature[i] = id;
         } else {
@@ -435,6 +498,9 @@ class SlamStep {
   reloc::WindowStats<T> window_stats_;  ///< step()'s, until it writes them out
   /// Each pair's round in commit(): a closure's (closure_rounds), or kAlone (Tentative::set_aside).
   std::array<std::uint8_t, B::kMaxObservations> round_{};
+  T travelled_m_ = T(0);  ///< since the local map began (reset, restart)
+  int scans_in_map_ = 0;  ///< since the local map began
+  int added_in_map_ = 0;  ///< landmarks augmented since the local map began
 };
 
 }  // namespace geojcbb::node

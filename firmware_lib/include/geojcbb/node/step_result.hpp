@@ -45,6 +45,9 @@ struct StepResult {
   reloc::LoopStats<T> loop;
   reloc::WindowStats<T> window;
   StageCounts counts;
+  /// The local map's closing rule fired (submap_landmarks, submap_distance_m, submap_scans): hand
+  /// it over, then SlamStep::restart.
+  bool submap_due = false;
 };
 
 /// A free-running counter read before and after each stage (e.g. SysTick or an instruction count);

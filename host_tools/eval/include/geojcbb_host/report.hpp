@@ -30,7 +30,9 @@ struct RunAggregate {
   int runs_over_5_fp = 0;                           ///< runs with more than 5 false pairs
   int full_runs = 0;                                ///< runs whose map filled
   double reloc_error_m = 0, reloc_anees_before = 0, reloc_anees_after = 0;  ///< sums over the runs
-  RunResult first;  ///< the run the path figure shows (set by the caller)
+  SubmapStats submaps;          ///< summed over the runs (the per-map vectors concatenated)
+  double worst_step_ratio = 0;  ///< the largest, over runs and local maps, of a map's slowest step / the first map's
+  RunResult first;              ///< the run the path figure shows (set by the caller)
   bool have_first = false;
   std::string error;  ///< of the last failed run
 
@@ -58,6 +60,11 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
 /// group F1 (rows and group_rows in the same order); `per` names what the means are over ("robot").
 void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportRow>& group_rows, std::FILE* f,
                    const char* per = "robot");
+
+/// The submaps table (RunOptions::submaps): per strategy the local maps, their landmarks, the joins'
+/// pairs fused, declined and refused, the wrong ones (labelled data), the global map's landmarks and
+/// the slowest step of a local map against the first map's. Prints nothing when no row joined maps.
+void print_submaps(const std::vector<std::string>& names, const std::vector<RunAggregate>& agg, std::FILE* f);
 
 /// One panel of the path figure: the true path (where known), the estimated path, the true
 /// landmarks, and the final map's landmarks (made from a landmark, or spurious).

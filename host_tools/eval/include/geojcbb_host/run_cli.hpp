@@ -45,6 +45,18 @@ inline void add_run_options(CLI::App& app, RunOptions& run) {
                  "a landmark within this of the sensor's range limits is not expected in view [m]")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0));
+  app.add_flag("--submaps", run.submaps,
+               "local maps of bounded size, each closed by its rule (--submap-landmarks, --submap-distance, "
+               "--submap-scans; none given: at the default device's size less a scan) and joined into one global "
+               "map (docs/submaps.md)");
+  app.add_flag("--submap-seed", run.submap_seed,
+               "with --submaps: each new local map begins with the global map's landmarks of its region");
+  app.add_option("--join-preset", run.join_preset, "the association between local maps (docs/submaps.md)")
+      ->capture_default_str();
+  app.add_option("--join-margin", run.join.margin_d2,
+                 "a pairing between maps that a runner-up within this joint d2 makes differently is kept apart")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
 }
 
 }  // namespace geojcbb::host

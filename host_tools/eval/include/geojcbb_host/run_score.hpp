@@ -61,8 +61,21 @@ struct InnovationSums {
   double nis[2] = {0, 0}, r_share[2] = {0, 0};
 };
 
+/// Sequential map joining's figures (RunOptions::submaps).
+struct SubmapStats {
+  int maps = 0;                      ///< local maps joined
+  int offered = 0;                   ///< their landmarks with a compatible global one
+  int fused = 0;                     ///< landmarks fused with a global one
+  int declined = 0;                  ///< ambiguous pairings kept apart
+  int refused = 0;                   ///< joins refused (their pairs not jointly compatible)
+  int wrong = 0;                     ///< fused pairs of two different true landmarks (labelled data)
+  std::vector<int> landmarks;        ///< per local map: its landmarks when closed
+  std::vector<double> worst_step_s;  ///< per local map: its slowest step
+};
+
 struct RunResult {
   Score score;
+  SubmapStats submaps;
   Score group_score;  ///< as score, but a pair is correct when its feature's
                       ///< landmark is in the same group
   int scans = 0;
@@ -111,6 +124,9 @@ class RunScorer {
   void added(FeatureId id, int truth);
   /// Landmark `id` left the map (tentative, missed in view).
   void removed(FeatureId id);
+  /// Landmark `id` left the local map with it, handed over (RunOptions::submaps): no longer mapped
+  /// here, and not counted as removed.
+  void handed_over(FeatureId id);
   /// True landmark of `id`: an index, -1 (clutter), kRemoved, or kUnknown.
   int truth_of(FeatureId id) const;
   /// Landmark ids handed out so far (ids are 0, 1, ... in order of creation).

@@ -14,6 +14,7 @@
 #include "geojcbb/core/settings.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb_host/global_map.hpp"
 #include "geojcbb_host/run_score.hpp"
 #include "geojcbb_host/run_source.hpp"
 #include "geojcbb_host/scene.hpp"
@@ -43,7 +44,20 @@ struct RunOptions {
   bool oracle = false;
   /// Record RunResult::trace, the pose estimate after every input.
   bool record_trace = false;
+  /// Sequential map joining (docs/submaps.md): each local map the step closes (its closing rule,
+  /// StepSettings::submap_*) is joined into a GlobalMap with these options, and the step restarts.
+  /// The pose and map reported are the global ones.
+  bool submaps = false;
+  /// Each new local map is seeded with the global landmarks of its local region (r + d), at most the
+  /// default device's candidates less the landmarks it carried over (docs/submaps.md, "Seeding").
+  bool submap_seed = false;
+  JoinOptions join;
+  std::string join_preset = "PCJCBB";  ///< join.preset's name (the command line's), read by step_settings
 };
+
+/// The closing rule of --submaps when none is given: the default device's map (96 landmarks) less
+/// one scan of new landmarks (24), so the closing scan never meets a full map.
+constexpr int kDefaultSubmapLandmarks = DefaultBounds::kMaxLandmarks - DefaultBounds::kMaxObservations;
 
 /// The step's settings of a run with this sensor: opt.step with r + d = max range + compensation,
 /// the view from the sensor's limits less the margin (and the FOV less 3 bearing sigma), and in

@@ -227,6 +227,10 @@ struct Config : Codec<Config> {
   bool hypothesis_hold = false;              ///< disputed observations held while a window is open
   bool cluster_first = false;                ///< each cluster of observations paired as a unit first
   bool evict_when_full = false;              ///< a full map evicts its least-seen landmark beyond r + d
+  std::uint32_t submap_landmarks = 0;        ///< the local map closes at this many landmarks (0: off)
+  float submap_distance_m = 0.0f;            ///< ... after this distance (0: off)
+  std::uint32_t submap_scans = 0;            ///< ... after this many scans (0: off)
+  bool submap_carry = true;                  ///< the next map begins with the region's confirmed landmarks
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
@@ -308,6 +312,14 @@ struct Config : Codec<Config> {
               "each cluster of observations paired as a unit first, its members at that posterior"),
         field("evict_when_full", &Config::evict_when_full, range::one_of(0, 1), "",
               "a full map makes room: its least-seen landmark beyond r + d goes"),
+        field("submap_landmarks", &Config::submap_landmarks, range::between(0, 32767), "",
+              "the local map is closed after a scan that leaves it this many landmarks (0: off)"),
+        field("submap_distance_m", &Config::submap_distance_m, range::not_below(0.0f), "m",
+              "the local map is closed once the robot has travelled this far in it (0: off)"),
+        field("submap_scans", &Config::submap_scans, range::between(0, 1000000), "scans",
+              "the local map is closed after this many scans (0: off)"),
+        field("submap_carry", &Config::submap_carry, range::one_of(0, 1), "",
+              "the next local map begins with the closed one's confirmed landmarks of the region"),
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
@@ -745,7 +757,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 147 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 160 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&

@@ -1,0 +1,157 @@
+// host_tools/eval: the global map of sequential map joining (Tardos, Neira, Newman, Leonard 2002;
+// docs/submaps.md). The device (or the in-process step) keeps a local map of bounded size, closes it
+// on a rule (StepSettings::submap_*), hands it over whole and starts the next one at the robot's
+// pose, empty. The local maps are therefore independent: each is built from its own scans only,
+// in its own frame, whose origin is the previous map's last robot pose. The host joins each as it
+// arrives:
+//   1. transform: the map's landmarks and its last robot pose into the global frame through the
+//      base (the previous map's last pose, a state of the global map), every correlation kept
+//   2. associate: the library's own association (a preset) between the new landmarks (as
+//      range-bearing "observations" from the base, R their covariance) and the global landmarks
+//      near them (as predictions from the base, C = H P H^T)
+//   3. test: the pairs' constraints l_new - l_global = 0 jointly, with the full covariance; a join
+//      that is not jointly compatible is refused (every landmark kept apart), and pairings the
+//      association declines as ambiguous (a runner-up within join_margin_d2) are kept apart
+//   4. fuse: the constraints as one update, the duplicates removed (marginalised); the new
+//      landmarks not paired stay; the base becomes the map's last pose.
+// Dense double (Eigen), O(D^2 pairs) per join for D = 3 + 2 landmarks.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/presets.hpp"
+#include "geojcbb/ekf/slam.hpp"
+
+namespace geojcbb::host {
+
+/// One closed local map as handed over: its last robot pose and its landmarks in its own frame
+/// (origin: the robot's pose when it began), with their covariance.
+struct Submap {
+  int index = 0;               ///< the map's number (0, 1, ...)
+  std::vector<FeatureId> ids;  ///< landmark ids (never reused across maps)
+  /// Per landmark: confirmed by its evidence (ekf::LandmarkPolicy). A tentative one joins the global
+  /// map only when it is paired with a global landmark; otherwise it is dropped (marginalised).
+  std::vector<bool> confirmed;
+  Eigen::VectorXd x;  ///< [x_r, y_r, theta_r, l_1x, l_1y, ...], 3 + 2 ids.size()
+  Eigen::MatrixXd P;  ///< its covariance
+  int landmarks() const { return static_cast<int>(ids.size()); }
+};
+
+/// A closed map read from the filter that holds it (the state and covariance as they are).
+template <typename T, class B>
+Submap submap_of(const ekf::Slam<T, B>& slam, int index) {
+  Submap m;
+  m.index = index;
+  const int n = slam.dim();
+  m.x.resize(n);
+  m.P.resize(n, n);
+  for (int r = 0; r < n; ++r) {
+    m.x(r) = static_cast<double>(slam.x(r));
+    for (int c = 0; c < n; ++c) m.P(r, c) = static_cast<double>(slam.cov(r, c));
+  }
+  for (int j = 0; j < slam.landmarks(); ++j) {
+    m.ids.push_back(slam.id(j));
+    m.confirmed.push_back(slam.confirmed(j));
+  }
+  return m;
+}
+
+struct JoinOptions {
+  /// The association between maps: PCJCBB, whose pose-free seed takes over when the base pose is
+  /// uncertain (a long chain of maps, another robot's).
+  Preset preset{Strategy::kPcjcbb, 0};
+  double confidence = 0.99;         ///< of the individual and joint tests
+  double margin_d2 = 6.0;           ///< ambiguity: a runner-up within this joint d2 (2 x loop_margin_nats)
+  double constraint_var_m2 = 1e-6;  ///< the fused constraint's noise, as ekf::Slam::merge's
+  /// The association's pairings tested again with the full covariance (the local map's own
+  /// correlations, which the association leaves out): only a jointly compatible subset is fused.
+  bool joint_check = true;
+};
+
+/// What one join did.
+struct JoinResult {
+  int landmarks = 0;     ///< of the local map
+  int shared = 0;        ///< carried over from the previous map (the same ids): joined by their ids
+  int offered = 0;       ///< of those, with a compatible global landmark (the association's observations)
+  int fused = 0;         ///< paired with a global landmark and fused
+  int declined = 0;      ///< ambiguous: kept apart
+  int pruned = 0;        ///< outside the jointly compatible subset (JoinOptions::joint_check): kept apart
+  int dropped = 0;       ///< tentative and not paired: left out
+  bool refused = false;  ///< the pairs were not jointly compatible: all kept apart
+  double joint_d2 = 0;   ///< of the fused pairs' constraints
+  /// The fused pairs: (local id, the global landmark's first id).
+  std::vector<std::pair<FeatureId, FeatureId>> pairs;
+};
+
+/// Global landmarks given to the next local map (its seed): their means in the base's frame (the new
+/// map's origin) and their joint covariance there, conditioned on the origin.
+struct Seed {
+  std::vector<FeatureId> first_ids;  ///< the global landmarks (their first ids)
+  Eigen::VectorXd x;                 ///< 2 per landmark
+  Eigen::MatrixXd P;
+};
+
+class GlobalMap {
+ public:
+  explicit GlobalMap(const JoinOptions& options);
+  ~GlobalMap();
+  GlobalMap(const GlobalMap&) = delete;
+  GlobalMap& operator=(const GlobalMap&) = delete;
+
+  /// Joins a closed local map. Throws std::runtime_error when the association fails (its status).
+  JoinResult join(const Submap& m);
+  /// The seed of the next local map: the global landmarks within radius_m of the base, nearest
+  /// first, at most max_count, none of those the local ids `carried` stand for. Remembered as that
+  /// map's prior on them once seeded() names their local ids.
+  Seed seed(double radius_m, int max_count, const std::vector<FeatureId>& carried) const;
+  /// The local map took seed `s`, its landmark k under local_ids[k].
+  void seeded(const Seed& s, const std::vector<FeatureId>& local_ids);
+  /// The global pose and covariance of a pose of the current local map (its origin is the base).
+  void to_global(const Pose2<double>& local, const Eigen::Matrix3d& P_local, Pose2<double>& global,
+                 Eigen::Matrix3d& P_global) const;
+  int landmarks() const { return static_cast<int>(first_id_.size()); }
+  Eigen::Vector2d landmark(int k) const { return x_.segment<2>(3 + 2 * k); }
+  Eigen::Matrix2d landmark_covariance(int k) const { return P_.block<2, 2>(3 + 2 * k, 3 + 2 * k); }
+  /// The id of the local landmark global landmark k was made from (its first).
+  FeatureId first_id(int k) const { return first_id_[static_cast<std::size_t>(k)]; }
+  /// Local maps joined so far.
+  int maps() const { return maps_; }
+  /// The whole state [base, landmarks] and its covariance.
+  const Eigen::VectorXd& state() const { return x_; }
+  const Eigen::MatrixXd& covariance() const { return P_; }
+
+ private:
+  struct Association;
+  /// The global landmark a local id was made into or fused with (-1: none).
+  int global_index(FeatureId local) const;
+  int index_of_first(FeatureId first) const;
+  /// What the map's scans add on the landmarks it shares with the previous map: its information on
+  /// them less the prior it began with (the previous map's, in its last pose's frame), as a
+  /// measurement of the global state (conditionally independent maps, Pinies and Tardos 2008).
+  void shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
+                     const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0);
+  /// The base frame's transform of global landmarks `g` (indices): their means R^T (l - b) and the
+  /// Jacobian of those with respect to the global state.
+  void in_base_frame(const std::vector<int>& g, Eigen::VectorXd& c, Eigen::MatrixXd& H) const;
+  /// The global state with the map's rows u (its pose, its landmarks not shared) appended, given the
+  /// shared ones: X = [x_, base (+) u], P with every correlation.
+  void augment(const Submap& m, const std::vector<int>& u, const std::vector<int>& shared,
+               const std::vector<int>& target, Eigen::VectorXd& X, Eigen::MatrixXd& P) const;
+  JoinOptions opt_;
+  Eigen::VectorXd x_;  ///< [base pose (3), landmarks (2 each)]
+  Eigen::MatrixXd P_;
+  std::vector<FeatureId> first_id_;
+  int maps_ = 0;
+  std::unique_ptr<Submap> prev_;                        ///< the last map joined: the next one's prior
+  Seed seed_;                                           ///< the current map's seed
+  std::vector<FeatureId> seed_ids_;                     ///< its landmarks' local ids
+  std::unordered_map<FeatureId, FeatureId> global_of_;  ///< local id -> its global landmark's first id
+  std::unique_ptr<Association> assoc_;                  ///< the association's workspace (large: on the heap)
+};
+
+}  // namespace geojcbb::host

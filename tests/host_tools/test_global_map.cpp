@@ -1,0 +1,112 @@
+// The host's global map (sequential map joining, docs/submaps.md): a duplicate between two maps is
+// fused to the information-weighted mean; a landmark carried over with nothing learned about it
+// leaves the global estimate as it was (its prior divided out, nothing counted twice); a landmark far
+// from every global one is kept as new; a labelled run joins its maps with no wrong join.
+#include <doctest/doctest.h>
+
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "geojcbb_host/global_map.hpp"
+#include "geojcbb_host/slam_run.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::host;
+
+namespace {
+// A local map with an exact last pose and independent landmarks (covariance var each).
+Submap make_map(int index, const Eigen::Vector3d& end, const std::vector<Eigen::Vector2d>& l,
+                const std::vector<FeatureId>& ids, double var) {
+  Submap m;
+  m.index = index;
+  m.ids = ids;
+  m.confirmed.assign(ids.size(), true);
+  const int n = static_cast<int>(l.size());
+  m.x.resize(3 + 2 * n);
+  m.x.head<3>() = end;
+  for (int k = 0; k < n; ++k) m.x.segment<2>(3 + 2 * k) = l[static_cast<std::size_t>(k)];
+  m.P = Eigen::MatrixXd::Identity(3 + 2 * n, 3 + 2 * n) * var;
+  m.P.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 1e-12;
+  return m;
+}
+}  // namespace
+
+TEST_CASE("global map: duplicates between two maps fused to the information-weighted mean") {
+  GlobalMap g(JoinOptions{});
+  // Map 0 (the world's frame): two landmarks with variance 0.04; it ends at (10, 0, 0), exactly.
+  const JoinResult first = g.join(make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}}, {0, 1}, 0.04));
+  CHECK(first.fused == 0);
+  REQUIRE(g.landmarks() == 2);
+  // Map 1 begins there and sees the same two (variance 0.01) 0.1 m off, and a third far away.
+  const JoinResult j = g.join(make_map(1, {5, 0, 0}, {{2.1, 0.9}, {5.1, -2.1}, {30, 30}}, {2, 3, 4}, 0.01));
+  CHECK(j.fused == 2);
+  CHECK(j.pruned == 0);
+  CHECK(!j.refused);
+  REQUIRE(g.landmarks() == 3);  // the third is new
+  CHECK(g.first_id(2) == 4);
+  // Information 25 and 100: the mean (25 x + 100 x') / 125, the variance 1 / 125.
+  CHECK(g.landmark(0).x() == doctest::Approx((25 * 12 + 100 * 12.1) / 125).epsilon(1e-4));
+  CHECK(g.landmark(0).y() == doctest::Approx((25 * 1 + 100 * 0.9) / 125).epsilon(1e-4));
+  CHECK(g.landmark(1).x() == doctest::Approx((25 * 15 + 100 * 15.1) / 125).epsilon(1e-4));
+  CHECK(g.landmark_covariance(0)(0, 0) == doctest::Approx(1.0 / 125).epsilon(1e-3));
+  // The base is map 1's last pose in the world: (10, 0, 0) + (5, 0, 0).
+  CHECK(g.state()(0) == doctest::Approx(15).epsilon(1e-6));
+  REQUIRE(j.pairs.size() == 2);
+  CHECK(j.pairs[0].second == 0);
+}
+
+TEST_CASE("global map: a carried landmark the new map learned nothing about leaves the global one as it was") {
+  GlobalMap g(JoinOptions{});
+  Submap m0 = make_map(0, {10, 0, 0.3}, {{12, 1}, {15, -2}}, {0, 1}, 0.04);
+  m0.P.topLeftCorner<3, 3>() = Eigen::Vector3d(0.02, 0.03, 0.001).asDiagonal();
+  m0.P(0, 3) = m0.P(3, 0) = 0.01;  // the last pose correlated with landmark 0
+  g.join(m0);
+  const Eigen::Vector2d before = g.landmark(0);
+  const Eigen::Matrix2d before_P = g.landmark_covariance(0);
+  // Map 1 carries landmark 0 with the prior the device began it with (the previous map's, in its
+  // last pose's frame) and sees nothing of it: its estimate and covariance are that prior.
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  Eigen::Matrix2d Rt;
+  Rt << c, s, -s, c;
+  const Eigen::Vector2d d = Rt * (Eigen::Vector2d(12, 1) - Eigen::Vector2d(10, 0));
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2, 5);
+  J.block<2, 2>(0, 0) = -Rt;
+  J(0, 2) = d.y();
+  J(1, 2) = -d.x();
+  J.block<2, 2>(0, 3) = Rt;
+  std::vector<int> rows = {0, 1, 2, 3, 4};
+  const Eigen::Matrix2d prior = J * m0.P(rows, rows) * J.transpose();
+  Submap m1 = make_map(1, {1, 0, 0}, {d, {40, 0}}, {0, 5}, 0.01);
+  m1.P.block<2, 2>(3, 3) = prior;
+  const JoinResult j = g.join(m1);
+  CHECK(j.shared == 1);
+  CHECK(j.fused == 0);
+  CHECK((g.landmark(0) - before).norm() < 1e-9);
+  CHECK((g.landmark_covariance(0) - before_P).norm() < 1e-9);
+  CHECK(g.landmarks() == 3);
+}
+
+TEST_CASE("global map: env1 in local maps of 30 landmarks, carried over and seeded: no wrong join, every map joined") {
+  const Scenario s = load_scenario(std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json");
+  RunOptions single;
+  single.step.strategy = Strategy::kPcjcbb;
+  const RunResult one = run_slam(s, 3, single);
+  for (const bool seed : {false, true}) {
+    RunOptions o;
+    o.step.strategy = Strategy::kPcjcbb;
+    o.submaps = true;
+    o.submap_seed = seed;
+    o.step.submap_landmarks = 30;
+    CAPTURE(seed);
+    const RunResult r = run_slam(s, 3, o);
+    CHECK(r.submaps.maps >= 5);
+    CHECK(r.submaps.wrong == 0);
+    CHECK(r.submaps.refused == 0);
+    CHECK(r.submaps.fused + r.submaps.declined + r.submaps.offered > 0);
+    CHECK(r.score.f1() > 0.98);
+    // The global map holds the landmarks the single map holds, not a copy per local map.
+    CHECK(r.landmarks <= one.landmarks);
+    CHECK(r.landmarks >= one.landmarks - 5);
+  }
+}
