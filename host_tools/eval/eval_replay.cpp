@@ -300,11 +300,7 @@ int run_replay(const ReplayOptions& o) {
     failures += agg[k].failed;
   }
   print_tables(rows, stdout, labelled);
-  {
-    std::vector<std::string> names;
-    for (const Method& m : strategies) names.push_back(m.name());
-    print_submaps(names, agg, stdout);
-  }
+  print_submaps(strategies, agg, stdout);
   std::vector<GpsScore> gps(strategies.size());
   nlohmann::json gps_rows;
   if (!log.gps.empty() && !o.runner) {

@@ -209,15 +209,7 @@ int run_sim(const SimOptions& o) {
     std::printf("\n== %s: %d runs per strategy (seeds %llu..%llu), %d scans per run\n", s.name.c_str(), o.runs,
                 static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1), scans);
     print_tables(rows, stdout);
-    {
-      std::vector<std::string> names;
-      std::vector<RunAggregate> aggs;
-      for (std::size_t st = 0; st < strategies.size(); ++st) {
-        names.push_back(strategies[st].name());
-        aggs.push_back(cells[sc][st]);
-      }
-      print_submaps(names, aggs, stdout);
-    }
+    print_submaps(strategies, cells[sc], stdout);
     js["scenarios"].push_back({{"name", s.name}, {"file", o.scenarios[sc]}, {"strategies", rows_json(rows)}});
 
     if (o.flags.svg) {

@@ -331,11 +331,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         "time-averaged pose NEES; 3 if consistent)\n");
     print_tables(rows, stdout);
     print_summary(rows, group_rows, stdout);
-    {
-      std::vector<std::string> names;
-      for (const Method& m : o.strategies) names.push_back(m.name());
-      print_submaps(names, agg, stdout);
-    }
+    print_submaps(o.strategies, agg, stdout);
     std::printf(
         "Table 2 at landmark-group level (a pair is correct when its "
         "feature's landmark is in the observed "

@@ -268,7 +268,7 @@ svg::Panel path_map_panel(const std::string& title, const RunResult& r, const st
   return p;
 }
 
-void print_submaps(const std::vector<std::string>& names, const std::vector<RunAggregate>& agg, std::FILE* f) {
+void print_submaps(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg, std::FILE* f) {
   bool any = false;
   for (const RunAggregate& a : agg) any = any || a.submaps.maps > 0;
   if (!any) return;
@@ -277,14 +277,14 @@ void print_submaps(const std::vector<std::string>& names, const std::vector<RunA
                "| strategy | local maps | landmarks per map (max) | offered | fused | declined | joins refused | "
                "wrong joins | global map | slowest step / first map's |\n"
                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  for (std::size_t k = 0; k < agg.size() && k < names.size(); ++k) {
+  for (std::size_t k = 0; k < agg.size() && k < strategies.size(); ++k) {
     const SubmapStats& m = agg[k].submaps;
     if (m.maps == 0) continue;
     int most = 0;
     for (int n : m.landmarks) most = std::max(most, n);
     const double global = agg[k].runs > 0 ? double(agg[k].landmarks) / agg[k].runs : 0;  // per run
-    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %.2f |\n", names[k].c_str(), m.maps, most,
-                 m.offered, m.fused, m.declined, m.refused, m.wrong, global, agg[k].worst_step_ratio);
+    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %.2f |\n", strategies[k].name().c_str(), m.maps,
+                 most, m.offered, m.fused, m.declined, m.refused, m.wrong, global, agg[k].worst_step_ratio);
   }
 }
 

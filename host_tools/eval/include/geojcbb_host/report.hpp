@@ -64,7 +64,7 @@ void print_summary(const std::vector<ReportRow>& rows, const std::vector<ReportR
 /// The submaps table (RunOptions::submaps): per strategy the local maps, their landmarks, the joins'
 /// pairs fused, declined and refused, the wrong ones (labelled data), the global map's landmarks and
 /// the slowest step of a local map against the first map's. Prints nothing when no row joined maps.
-void print_submaps(const std::vector<std::string>& names, const std::vector<RunAggregate>& agg, std::FILE* f);
+void print_submaps(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg, std::FILE* f);
 
 /// One panel of the path figure: the true path (where known), the estimated path, the true
 /// landmarks, and the final map's landmarks (made from a landmark, or spurious).
