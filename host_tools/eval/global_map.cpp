@@ -35,6 +35,23 @@ Eigen::Matrix2d rotation(double theta) {
   return R;
 }
 
+/// Landmarks `g` (indices: rows 3 + 2 g of x) in the frame of the pose at x's first three rows,
+/// R(theta)^T (l - p), and the Jacobian of those with respect to x.
+void in_frame(const Eigen::VectorXd& x, const std::vector<int>& g, Eigen::VectorXd& c, Eigen::MatrixXd& H) {
+  const int s = static_cast<int>(g.size());
+  const Eigen::Matrix2d Rt = rotation(x(2)).transpose();
+  c.resize(2 * s);
+  H = Eigen::MatrixXd::Zero(2 * s, x.size());
+  for (int k = 0; k < s; ++k) {
+    const int r = 3 + 2 * g[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d d = Rt * (x.segment<2>(r) - x.head<2>());
+    c.segment<2>(2 * k) = d;
+    H.block<2, 2>(2 * k, 0) = -Rt;
+    H.block<2, 1>(2 * k, 2) << d.y(), -d.x();
+    H.block<2, 2>(2 * k, r) = Rt;
+  }
+}
+
 }  // namespace
 
 struct GlobalMap::Association {
@@ -129,24 +146,17 @@ JoinResult GlobalMap::join(const Submap& m) {
     std::vector<int> carried, seeded;  // positions in shared
     for (int k = 0; k < s; ++k) (prev_row[static_cast<std::size_t>(k)] >= 0 ? carried : seeded).push_back(k);
     if (!carried.empty()) {  // the previous map's landmarks in its last pose's frame
-      const Submap& pm = *prev_;
-      const Eigen::Matrix2d pRt = rotation(pm.x(2)).transpose();
-      std::vector<int> prow = {0, 1, 2}, out;
-      const int c = static_cast<int>(carried.size());
-      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * c, 3 + 2 * c);
-      for (int q = 0; q < c; ++q) {
-        const int r = prev_row[static_cast<std::size_t>(carried[static_cast<std::size_t>(q)])];
-        prow.push_back(3 + 2 * r);
-        prow.push_back(4 + 2 * r);
-        const Eigen::Vector2d d = pRt * (pm.x.segment<2>(3 + 2 * r) - pm.x.head<2>());
-        m0.segment<2>(2 * carried[static_cast<std::size_t>(q)]) = d;
-        J.block<2, 2>(2 * q, 0) = -pRt;
-        J.block<2, 1>(2 * q, 2) << d.y(), -d.x();
-        J.block<2, 2>(2 * q, 3 + 2 * q) = pRt;
-        out.push_back(2 * carried[static_cast<std::size_t>(q)]);
-        out.push_back(2 * carried[static_cast<std::size_t>(q)] + 1);
+      std::vector<int> from, out;
+      for (int k : carried) {
+        from.push_back(prev_row[static_cast<std::size_t>(k)]);
+        out.push_back(2 * k);
+        out.push_back(2 * k + 1);
       }
-      P0(out, out) = J * pm.P(prow, prow) * J.transpose();
+      Eigen::VectorXd d;
+      Eigen::MatrixXd J;
+      in_frame(prev_->x, from, d, J);
+      m0(out) = d;
+      P0(out, out) = J * prev_->P * J.transpose();
     }
     if (!seeded.empty()) {
       std::vector<int> from, out;
@@ -403,7 +413,7 @@ void GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared, c
   const int D0 = static_cast<int>(x_.size());
   Eigen::VectorXd c;
   Eigen::MatrixXd Hc;
-  in_base_frame(target, c, Hc);
+  in_frame(x_, target, c, Hc);
   // One measurement per direction the scans informed (eigenvalue > 0): v^T c = v^T b / lambda,
   // noise 1 / lambda.
   std::vector<int> dirs;
@@ -453,7 +463,7 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
     const Eigen::MatrixXd B = Pcc.ldlt().solve(Puc.transpose()).transpose();
     Eigen::VectorXd c;
     Eigen::MatrixXd Hc;
-    in_base_frame(target, c, Hc);
+    in_frame(x_, target, c, Hc);
     xu += B * (c - m.x(rows));
     Pu -= B * Puc.transpose();
     Pu = (0.5 * (Pu + Pu.transpose())).eval();
@@ -488,21 +498,6 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
   P.bottomRightCorner(Du, Du) = 0.5 * (Puu + Puu.transpose());
 }
 
-void GlobalMap::in_base_frame(const std::vector<int>& g, Eigen::VectorXd& c, Eigen::MatrixXd& H) const {
-  const int s = static_cast<int>(g.size());
-  const Eigen::Matrix2d Rt = rotation(x_(2)).transpose();
-  c.resize(2 * s);
-  H = Eigen::MatrixXd::Zero(2 * s, x_.size());
-  for (int k = 0; k < s; ++k) {
-    const int r = 3 + 2 * g[static_cast<std::size_t>(k)];
-    const Eigen::Vector2d d = Rt * (x_.segment<2>(r) - x_.head<2>());
-    c.segment<2>(2 * k) = d;
-    H.block<2, 2>(2 * k, 0) = -Rt;
-    H.block<2, 1>(2 * k, 2) << d.y(), -d.x();
-    H.block<2, 2>(2 * k, r) = Rt;
-  }
-}
-
 Seed GlobalMap::seed(double radius_m, int max_count, const std::vector<FeatureId>& carried) const {
   std::vector<bool> taken(static_cast<std::size_t>(landmarks()), false);
   for (FeatureId id : carried) {
@@ -524,7 +519,7 @@ Seed GlobalMap::seed(double radius_m, int max_count, const std::vector<FeatureId
     s.first_ids.push_back(first_id_[static_cast<std::size_t>(p.second)]);
   }
   Eigen::MatrixXd H;
-  in_base_frame(g, s.x, H);
+  in_frame(x_, g, s.x, H);
   s.P = H * P_ * H.transpose();
   s.P = (0.5 * (s.P + s.P.transpose())).eval();
   return s;

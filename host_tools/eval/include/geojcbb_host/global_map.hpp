@@ -135,9 +135,6 @@ class GlobalMap {
   /// measurement of the global state (conditionally independent maps, Pinies and Tardos 2008).
   void shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
                      const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0);
-  /// The base frame's transform of global landmarks `g` (indices): their means R^T (l - b) and the
-  /// Jacobian of those with respect to the global state.
-  void in_base_frame(const std::vector<int>& g, Eigen::VectorXd& c, Eigen::MatrixXd& H) const;
   /// The global state with the map's rows u (its pose, its landmarks not shared) appended, given the
   /// shared ones: X = [x_, base (+) u], P with every correlation.
   void augment(const Submap& m, const std::vector<int>& u, const std::vector<int>& shared,
