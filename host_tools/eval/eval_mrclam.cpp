@@ -59,6 +59,10 @@ Subcommand add_mrclam_command(CLI::App& app) {
                  "window over which the drive's scale and noise are fitted [s]")
       ->default_val(m.calibration_options.fit_window_s)
       ->check(CLI::Range(0.1, 30.0));
+  mr->add_flag("--merge", m.merge,
+               "per data set and strategy, merge the robots' final maps into one global map with their start poses "
+               "unknown (a pose-free alignment finds them; docs/submaps.md): prints the global map, wrong joins and "
+               "the starts found against the ground truth");
   add_run_options(*mr, m.run);
   return {mr, [o]() {
             MrclamOptions& mo = o->m;

@@ -243,9 +243,10 @@ int run_replay(const ReplayOptions& o) {
     noise.sigma_w_radps *= std::sqrt(scales.odometry);
   }
   if (o.runner && !log.gps.empty()) {
-    std::printf("GPS scoring needs the pose after every input, which a device does not report: not scored\n");
+    std::printf(
+        "GPS: the device reports its pose after every scan; between scans the host moves it by the odometry it "
+        "sent (the filter's mean moves by the motion model alone)\n");
   }
-  base.record_trace = base.record_trace && !o.runner;
   fs::create_directories(o.flags.out_dir);
   int scans = 0, predictions = 0, with_truth = 0;
   for (const RunInput& in : source.inputs()) {
@@ -303,7 +304,7 @@ int run_replay(const ReplayOptions& o) {
   print_submaps(strategies, agg, stdout);
   std::vector<GpsScore> gps(strategies.size());
   nlohmann::json gps_rows;
-  if (!log.gps.empty() && !o.runner) {
+  if (!log.gps.empty()) {
     for (std::size_t k = 0; k < strategies.size(); ++k)
       if (agg[k].have_first) gps[k] = score_gps(agg[k].first.trace, log.gps, gps_opt);
     gps_rows = gps_table(strategies, agg, gps);
@@ -325,7 +326,7 @@ int run_replay(const ReplayOptions& o) {
   {
     std::ofstream csv(o.flags.out_dir + "/replay.csv");
     const std::set<std::string> unmeasured = unmeasured_columns(labelled && !o.runner, with_truth > 0);
-    const bool scored_gps = !log.gps.empty() && !o.runner;
+    const bool scored_gps = !log.gps.empty();
     csv << "log,strategy";
     for (const std::string& c : run_csv_columns()) csv << ',' << c;
     for (const char* c : kGpsColumns) csv << ',' << c;
@@ -390,7 +391,7 @@ int run_replay(const ReplayOptions& o) {
       }
     }
     if (o.group_radius_m > 0) js["group_level"] = rows_json(group_rows);
-    if (!log.gps.empty() && !o.runner) {
+    if (!log.gps.empty()) {
       js["gps"] = {{"fixes", gps[0].fixes},
                    {"rejected_after_gap", gps[0].after_gap},
                    {"rejected_jumps", gps[0].jumps},
@@ -408,7 +409,7 @@ int run_replay(const ReplayOptions& o) {
     path.cols = std::min<int>(3, static_cast<int>(strategies.size()));
     for (std::size_t k = 0; k < strategies.size(); ++k) {
       if (!agg[k].have_first) continue;
-      if (log.gps.empty() || o.runner) {
+      if (log.gps.empty()) {
         path.panels.push_back(path_map_panel(strategies[k].name(), agg[k].first, positions));
       } else {
         char t[96];

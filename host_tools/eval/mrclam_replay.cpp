@@ -1,5 +1,7 @@
 #include "geojcbb_host/mrclam_replay.hpp"
 
+#include "geojcbb_host/map_merge.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -186,6 +188,83 @@ void write_trace(const std::string& path, const RunResult& res) {
 }
 }  // namespace
 
+namespace {
+
+/// A robot's final map in its own frame: the run's map (in the world frame, as it started at its true
+/// pose) moved by the inverse of its start. EKF-SLAM commutes with a rigid change of the start (the
+/// models are invariant), so this is the map it would have built from an origin of its own.
+RobotMap own_frame(const RunResult& r, const Pose2<double>& x0) {
+  RobotMap m;
+  const double c = std::cos(x0.theta), sn = std::sin(x0.theta);
+  Eigen::Matrix2d Rt;
+  Rt << c, sn, -sn, c;
+  const int n = static_cast<int>(r.map.size());
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  for (int i = 0; i < n; ++i) {
+    const MapLandmark& l = r.map[static_cast<std::size_t>(i)];
+    m.landmarks.push_back(Rt * Eigen::Vector2d(l.x - x0.x, l.y - x0.y));
+    m.truth.push_back(l.truth);
+    J.block<2, 2>(2 * i, 2 * i) = Rt;
+  }
+  m.P = J * r.map_cov * J.transpose();
+  return m;
+}
+
+/// b in a's frame: a^-1 (+) b.
+Pose2<double> relative(const Pose2<double>& a, const Pose2<double>& b) {
+  const double c = std::cos(a.theta), sn = std::sin(a.theta), dx = b.x - a.x, dy = b.y - a.y;
+  return {c * dx + sn * dy, -sn * dx + c * dy, wrap_angle(b.theta - a.theta)};
+}
+
+struct MergedRobot {
+  int robot;
+  Pose2<double> x0;  ///< its true start: only for the score
+  const RunResult* res;
+};
+
+/// mrclam --merge: the robots' maps merged with their starts unknown, the starts found scored.
+void print_merge(int dataset, const std::string& strategy, const std::vector<MergedRobot>& robots, double f1,
+                 const MergeOptions& mo, nlohmann::json& js) {
+  if (robots.empty()) return;
+  std::vector<RobotMap> maps;
+  for (const MergedRobot& r : robots) maps.push_back(own_frame(*r.res, r.x0));
+  const MergeResult m = merge_maps(maps, mo);
+  int alone = 0;
+  for (bool a : m.aligned) alone += !a;
+  std::printf("Merged, %s (the robots' maps in their own frames, starts unknown; docs/submaps.md)\n", strategy.c_str());
+  std::printf(
+      "  global map: %zu landmarks\n  wrong joins: %d\n  fused %d pairs; %d map(s) kept apart; F1 over all "
+      "robots %.3f\n",
+      m.landmarks.size(), m.wrong, m.fused, alone, f1);
+  nlohmann::json starts = nlohmann::json::array();
+  for (std::size_t k = 1; k < robots.size(); ++k) {
+    const Pose2<double> truth = relative(robots[0].x0, robots[k].x0);
+    if (!m.aligned[k]) {
+      std::printf("  robot %d: not joined: %s\n", robots[k].robot, m.why[k].c_str());
+      starts.push_back({{"robot", robots[k].robot}, {"found", false}, {"why", m.why[k]}});
+      continue;
+    }
+    const Pose2<double>& f = m.start[k];
+    const double e = std::hypot(f.x - truth.x, f.y - truth.y), a = std::abs(wrap_angle(f.theta - truth.theta));
+    std::printf(
+        "  robot %d's start in robot %d's frame: found (%.3f, %.3f, %.2f deg), true (%.3f, %.3f, %.2f deg): "
+        "error %.3f m, %.2f deg; %d landmarks fused\n",
+        robots[k].robot, robots[0].robot, f.x, f.y, f.theta * 180 / kPi<double>, truth.x, truth.y,
+        truth.theta * 180 / kPi<double>, e, a * 180 / kPi<double>, m.pairs[k]);
+    starts.push_back(
+        {{"robot", robots[k].robot}, {"found", true}, {"error_m", e}, {"error_deg", a * 180 / kPi<double>}});
+  }
+  js["merged"].push_back({{"dataset", dataset},
+                          {"strategy", strategy},
+                          {"landmarks", m.landmarks.size()},
+                          {"wrong_joins", m.wrong},
+                          {"fused", m.fused},
+                          {"f1", f1},
+                          {"starts", starts}});
+}
+
+}  // namespace
+
 int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool progress) {
   if (!o.trace_dir.empty()) std::filesystem::create_directories(o.trace_dir);
   const std::string root = o.data_dir.empty() ? mrclam::default_data_dir() : o.data_dir;
@@ -229,6 +308,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   }
   struct Job {
     std::size_t d, r, s;
+    Pose2<double> x0{};  ///< the start (the ground truth's): the robot's own frame for --merge
     RunResult res;
     double run_s = 0;
     std::string error;
@@ -236,7 +316,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   std::vector<Job> jobs;
   for (std::size_t d = 0; d < data.size(); ++d)
     for (std::size_t r = 0; r < data[d].logs.size(); ++r)
-      for (std::size_t s = 0; s < o.strategies.size(); ++s) jobs.push_back({d, r, s, {}, 0, {}});
+      for (std::size_t s = 0; s < o.strategies.size(); ++s)
+        jobs.push_back({d, r, s, Pose2<double>{}, RunResult{}, 0, std::string{}});
   const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, progress, [&](std::size_t j) {
     Job& jb = jobs[j];
@@ -255,6 +336,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       ro.landmark_group = replay::landmark_groups(positions, kLandmarkGroupRadius_m);
       if (o.known_map) ro.known_map = positions;
       replay::LogSource src(log, replay::LogNoise{});
+      jb.x0 = src.x0;
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
     } catch (const std::exception& e) {
       jb.error = e.what();
@@ -337,6 +419,17 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         "feature's landmark is in the observed "
         "landmark's group)\n");
     print_accuracy(group_rows, stdout);
+    if (o.merge) {
+      for (std::size_t s = 0; s < o.strategies.size(); ++s) {
+        std::vector<MergedRobot> robots;
+        for (std::size_t r = 0; r < dd.logs.size(); ++r) {
+          const Job& jb =
+              *std::find_if(jobs.begin(), jobs.end(), [&](const Job& x) { return x.d == d && x.r == r && x.s == s; });
+          if (jb.error.empty()) robots.push_back({dd.logs[r].robot, jb.x0, &jb.res});
+        }
+        print_merge(dd.number, o.strategies[s].name(), robots, agg[s].score.f1(), o.merge_options, js);
+      }
+    }
     {
       // The path and map figure (report.hpp, as the simulation's and the own-log replay's): one
       // panel per robot, for GEOJCBB (else the first strategy listed).

@@ -59,18 +59,7 @@ void SlamSession::State::hand_over() {
   const Submap m = submap_of(slam, st.maps);
   id_truth.resize(sc.ids(), RunScorer::kUnknown);
   for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
-  const JoinResult joined = global->join(m);
-  ++st.maps;
-  st.offered += joined.offered;
-  st.fused += joined.fused;
-  st.declined += joined.declined;
-  st.refused += joined.refused;
-  for (const auto& p : joined.pairs) {
-    const int a = id_truth[static_cast<std::size_t>(p.first)], b = id_truth[static_cast<std::size_t>(p.second)];
-    st.wrong += a >= 0 && b >= 0 && a != b;
-  }
-  st.landmarks.push_back(m.landmarks());
-  st.worst_step_s.push_back(map_worst_s);
+  record_join(st, m, global->join(m), id_truth, map_worst_s);
   map_worst_s = 0;
   check(step.restart(), "restart");
   for (FeatureId id : m.ids) {  // the landmarks not carried into the next map leave the scorer's map
@@ -97,6 +86,34 @@ void SlamSession::State::hand_over() {
     sc.added(id, id_truth[static_cast<std::size_t>(seed.first_ids[k])]);
   }
   global->seeded(seed, ids);
+}
+
+std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSettings<double>& step) {
+  JoinOptions join = opt.join;
+  if (!parse_preset(opt.join_preset.c_str(), join.preset)) {
+    throw std::invalid_argument("unknown join preset '" + opt.join_preset + "' (" + kPresetsHelp + ")");
+  }
+  join.confidence = step.confidence;
+  return std::make_unique<GlobalMap>(join);
+}
+
+void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const std::vector<int>& id_truth,
+                 double worst_step_s) {
+  ++st.maps;
+  st.offered += joined.offered;
+  st.fused += joined.fused;
+  st.declined += joined.declined;
+  st.refused += joined.refused;
+  auto truth = [&](FeatureId id) {
+    const auto k = static_cast<std::size_t>(id);
+    return k < id_truth.size() ? id_truth[k] : -1;
+  };
+  for (const auto& p : joined.pairs) {
+    const int a = truth(p.first), b = truth(p.second);
+    st.wrong += a >= 0 && b >= 0 && a != b;
+  }
+  st.landmarks.push_back(m.landmarks());
+  st.worst_step_s.push_back(worst_step_s);
 }
 
 // The ground-truth association (the step's association override): each observation of a mapped
@@ -202,14 +219,9 @@ SlamSession::SlamSession(const RunOptions& opt, const SensorModel& sensor, std::
   check(s.step.configure(ss), "configure");
   s.scorer = std::make_unique<RunScorer>(true_landmarks, opt.landmark_group);
   check(s.step.reset(x0, P0), "reset");
-  if (opt.submaps) {
-    JoinOptions join = opt.join;
-    if (!parse_preset(opt.join_preset.c_str(), join.preset)) {
-      throw std::invalid_argument("unknown join preset '" + opt.join_preset + "' (" + kPresetsHelp + ")");
-    }
-    join.confidence = ss.confidence;
+  if (ss.submap_landmarks > 0 || ss.submap_distance_m > 0 || ss.submap_scans > 0) {  // a closing rule: joined
     s.radius_m = ss.local_radius_m;
-    s.global = std::make_unique<GlobalMap>(join);
+    s.global = make_global_map(opt, ss);
   }
   const double v = opt.known_map_sigma_m * opt.known_map_sigma_m;
   for (std::size_t k = 0; k < opt.known_map.size(); ++k) {
@@ -361,6 +373,7 @@ RunResult SlamSession::finish() {
       res.map.push_back({s.global->landmark(k).x(), s.global->landmark(k).y(), t});
       res.spurious_in_map += t < 0;
     }
+    res.map_cov = s.global->covariance().bottomRightCorner(2 * res.landmarks, 2 * res.landmarks);
     return res;
   }
   RunResult res = s.scorer->finish();
@@ -371,6 +384,10 @@ RunResult SlamSession::finish() {
     res.map.push_back({slam.landmark(j).x(), slam.landmark(j).y(), t});
     res.spurious_in_map += t < 0;
   }
+  const int n = 2 * res.landmarks;
+  res.map_cov.resize(n, n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) res.map_cov(r, c) = slam.cov(3 + r, 3 + c);
   return res;
 }
 

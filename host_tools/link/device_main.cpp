@@ -1,4 +1,5 @@
-// geojcbb_device: the firmware's device loop (node::Node, float, DesktopBounds) on a serial port or
+// geojcbb_device: the firmware's device loop (node::Node, float, DesktopBounds or with --default-bounds
+// DefaultBounds) on a serial port or
 // on a new pseudo-terminal, whose path it prints as "pty: PATH". Runs until SIGINT/SIGTERM, until
 // the port closes, or until a SHUTDOWN message, whose exit code it exits with.
 #include <atomic>
@@ -33,6 +34,10 @@ int run(int argc, char** argv) {
                  "transport of --port: auto (termios for /dev/pts/*, else libserialport), termios or libserialport")
       ->check(CLI::IsMember({"auto", "termios", "libserialport"}))
       ->default_val(transport);
+  bool default_bounds = false;
+  app.add_flag("--default-bounds", default_bounds,
+               "the default firmware's bounds (96 landmarks, as the 128 KiB Cortex-M4F image) instead of the large "
+               "firmware's");
   bool list = false;
   app.add_flag("--list-ports", list, "print the serial ports libserialport finds and exit");
   CLI11_PARSE(app, argc, argv);
@@ -64,7 +69,7 @@ int run(int argc, char** argv) {
     } else {
       t = geojcbb::host::open_transport(port, baud, geojcbb::host::parse_transport_kind(transport));
     }
-    const geojcbb::host::ServeResult r = geojcbb::host::serve_device(*t, g_stop, boot_id);
+    const geojcbb::host::ServeResult r = geojcbb::host::serve_device(*t, g_stop, boot_id, default_bounds);
     if (r.shutdown_code) {
       std::fprintf(stderr, "geojcbb_device: SHUTDOWN with exit code %d after %llu bytes\n", *r.shutdown_code,
                    static_cast<unsigned long long>(r.bytes));

@@ -8,10 +8,25 @@
 #include <cstdio>
 #include <stdexcept>
 #include <thread>
+#include <vector>
+#include <algorithm>
 
 namespace geojcbb::host {
 
 DeviceProcess::DeviceProcess(const std::string& program) {
+  // "PROG ARG ...": the program and its own arguments, split at spaces; --pty is added.
+  std::vector<std::string> words;
+  for (std::size_t i = 0; i < program.size();) {
+    const std::size_t j = std::min(program.find(' ', i), program.size());
+    if (j > i) words.push_back(program.substr(i, j - i));
+    i = j + 1;
+  }
+  if (words.empty()) throw std::runtime_error("no device program given");
+  words.emplace_back("--pty");
+  std::vector<char*> argv;
+  argv.reserve(words.size() + 1);
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("pipe failed");
   const pid_t pid = fork();
@@ -24,7 +39,7 @@ DeviceProcess::DeviceProcess(const std::string& program) {
     dup2(fds[1], STDOUT_FILENO);
     close(fds[0]);
     close(fds[1]);
-    execl(program.c_str(), program.c_str(), "--pty", static_cast<char*>(nullptr));
+    execv(argv[0], argv.data());
     _exit(127);
   }
   pid_ = pid;

@@ -52,6 +52,10 @@ LinkClient::Frame LinkClient::wait(const char* what, Accept&& accept) {
       }
       if (fr.type == static_cast<std::uint8_t>(proto::MsgType::kError)) {
         proto::ErrorReport r;
+        if (r.decode(p, n) == proto::Error::kOk && r.error == proto::Error::kBusy) {
+          ++busy_;  // a stream frame sent during a hand-over: still pending, sent again after SUBMAP_ACK
+          continue;
+        }
         if (r.decode(p, n) == proto::Error::kOk && !stale(r.offending_seq)) {
           throw LinkError(std::string("ERROR for ") + proto::to_string(static_cast<proto::MsgType>(r.offending_type)) +
                               " seq " + std::to_string(r.offending_seq) + ": " + proto::to_string(r.error),
@@ -209,6 +213,75 @@ LinkClient::ScanReply LinkClient::scan(const LinkObsBatch& b) {
   return receive_scan(b.batch_id);
 }
 
+LinkClient::WireSubmap LinkClient::receive_submap(std::uint32_t map_id, int attempts) {
+  WireSubmap w;
+  w.map_id = map_id;
+  std::vector<bool> have;
+  std::size_t got = 0;
+  const std::string what = "the frames of local map " + std::to_string(map_id);
+  for (int a = 0;; ++a) {
+    try {
+      wait(what.c_str(), [&](const Frame& f) {
+        const bool head = f.type == static_cast<std::uint8_t>(proto::MsgType::kSubmap);
+        const bool cov = f.type == static_cast<std::uint8_t>(proto::MsgType::kSubmapCov);
+        if (!head && !cov) return Take::kSkip;
+        std::uint16_t chunk = 0, chunks = 0;
+        if (head) {
+          proto::Submap m;
+          if (m.decode(f.payload.data(), f.payload.size()) != proto::Error::kOk || m.map_id != map_id)
+            return Take::kSkip;
+          chunk = m.chunk;
+          chunks = m.chunks;
+          w.pose = Pose2<double>{m.x_m, m.y_m, m.theta_rad};
+          w.landmarks.resize(m.landmarks);
+          for (std::size_t k = 0; k < m.count; ++k) w.landmarks[m.first + k] = m.items[k];
+          w.cov.resize(proto::submap_cov_entries(m.landmarks));
+        } else {
+          proto::SubmapCov m;
+          if (m.decode(f.payload.data(), f.payload.size()) != proto::Error::kOk || m.map_id != map_id)
+            return Take::kSkip;
+          chunk = m.chunk;
+          chunks = m.chunks;
+          if (w.cov.size() < m.offset + m.count) w.cov.resize(m.offset + m.count);
+          for (std::size_t k = 0; k < m.count; ++k) w.cov[m.offset + k] = m.items[k].v;
+        }
+        if (have.size() != chunks) {  // the first frame of a sending
+          have.assign(chunks, false);
+          got = 0;
+        }
+        if (!have[chunk]) {
+          have[chunk] = true;
+          ++got;
+        }
+        w.frames = chunks;
+        return got == have.size() ? Take::kTake : Take::kSkip;
+      });
+      if (w.cov.size() != proto::submap_cov_entries(static_cast<std::uint32_t>(w.landmarks.size()))) {
+        throw LinkError("local map " + std::to_string(map_id) + ": its covariance does not fit its landmarks");
+      }
+      return w;
+    } catch (const LinkError& e) {
+      if (e.kind != LinkError::Kind::kTimeout || a + 1 >= attempts) throw;
+    }
+    ++w.requests;  // frames lost: the device sends the map again from the same memory
+    request_submap(map_id);
+  }
+}
+
+void LinkClient::request_submap(std::uint32_t map_id) {
+  proto::SubmapAck m;
+  m.map_id = map_id;
+  m.send = true;
+  acknowledged(m, false);
+}
+
+void LinkClient::submap_received(std::uint32_t map_id) {
+  proto::SubmapAck m;
+  m.map_id = map_id;
+  acknowledged(m, false);
+  resend_pending();
+}
+
 proto::Stats LinkClient::stats() {
   // STATS already received (periodic ones) are older than the answer: record them first.
   for (auto it = queue_.begin(); it != queue_.end();) {
@@ -237,20 +310,34 @@ void LinkClient::resend_pending() {
 // ---------------------------------------------------------------------------------------------
 
 struct DesktopDevice::Impl {
-  node::Node<float, DesktopBounds> node;
+  std::unique_ptr<node::Node<float, DesktopBounds>> large;
+  std::unique_ptr<node::Node<float, DefaultBounds>> small;
   Transport* t = nullptr;
   std::optional<std::uint8_t>* shutdown = nullptr;
+  void on_bytes(const std::uint8_t* p, std::size_t n) {
+    if (large) {
+      large->on_bytes(p, n);
+    } else {
+      small->on_bytes(p, n);
+    }
+  }
 };
 
-DesktopDevice::DesktopDevice(std::uint32_t boot_id) : impl_(std::make_unique<Impl>()) {
+DesktopDevice::DesktopDevice(std::uint32_t boot_id, bool default_bounds) : impl_(std::make_unique<Impl>()) {
   impl_->shutdown = &shutdown_;
-  impl_->node.start(node::Output{impl_.get(),
-                                 [](void* ctx, const std::uint8_t* p, std::size_t n) {
-                                   Impl* d = static_cast<Impl*>(ctx);
-                                   if (d->t != nullptr) d->t->write(p, n);
-                                 },
-                                 [](void* ctx, std::uint8_t code) { *static_cast<Impl*>(ctx)->shutdown = code; }},
-                    boot_id);
+  const node::Output out{impl_.get(),
+                         [](void* ctx, const std::uint8_t* p, std::size_t n) {
+                           Impl* d = static_cast<Impl*>(ctx);
+                           if (d->t != nullptr) d->t->write(p, n);
+                         },
+                         [](void* ctx, std::uint8_t code) { *static_cast<Impl*>(ctx)->shutdown = code; }};
+  if (default_bounds) {
+    impl_->small = std::make_unique<node::Node<float, DefaultBounds>>();
+    impl_->small->start(out, boot_id);
+  } else {
+    impl_->large = std::make_unique<node::Node<float, DesktopBounds>>();
+    impl_->large->start(out, boot_id);
+  }
 }
 
 DesktopDevice::~DesktopDevice() = default;
@@ -263,7 +350,7 @@ std::uint64_t DesktopDevice::serve(Transport& t, const std::atomic<bool>& stop) 
     while (!stop.load() && !shutdown_) {
       const std::size_t n = t.read(buf, sizeof buf, 50);
       total += n;
-      impl_->node.on_bytes(buf, n);
+      impl_->on_bytes(buf, n);
     }
   } catch (...) {
     impl_->t = nullptr;
@@ -273,8 +360,8 @@ std::uint64_t DesktopDevice::serve(Transport& t, const std::atomic<bool>& stop) 
   return total;
 }
 
-ServeResult serve_device(Transport& t, const std::atomic<bool>& stop, std::uint32_t boot_id) {
-  auto d = std::make_unique<DesktopDevice>(boot_id);
+ServeResult serve_device(Transport& t, const std::atomic<bool>& stop, std::uint32_t boot_id, bool default_bounds) {
+  auto d = std::make_unique<DesktopDevice>(boot_id, default_bounds);
   ServeResult r;
   r.bytes = d->serve(t, stop);
   r.shutdown_code = d->shutdown_code();

@@ -171,6 +171,24 @@ LinkClient::ScanReply LinkSession::receive_scan(std::uint32_t batch_id) {
   return guarded("the reply to a batch", true, [&] { return client_->receive_scan(batch_id); });
 }
 
+// After a reconnection to the same device the map is still pending there: it is asked for again.
+LinkClient::WireSubmap LinkSession::receive_submap(std::uint32_t map_id) {
+  bool first = true;
+  return guarded("the frames of a local map", true, [&] {
+    if (!first) client_->request_submap(map_id);
+    first = false;
+    return client_->receive_submap(map_id);
+  });
+}
+
+void LinkSession::request_submap(std::uint32_t map_id) {
+  guarded("SUBMAP_ACK", true, [&] { client_->request_submap(map_id); });
+}
+
+void LinkSession::submap_received(std::uint32_t map_id) {
+  guarded("SUBMAP_ACK", true, [&] { client_->submap_received(map_id); });
+}
+
 proto::Stats LinkSession::stats() {
   return guarded("STATS", false, [&] { return client_->stats(); });
 }

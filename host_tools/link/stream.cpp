@@ -1,5 +1,6 @@
 #include "geojcbb_host/stream.hpp"
 
+#include "geojcbb/ekf/motion.hpp"
 #include "geojcbb/node/node.hpp"
 
 #include <algorithm>
@@ -157,9 +158,40 @@ LinkObsBatch link_batch(const std::vector<SimObservation>& scan, std::uint32_t b
   return link_batch(scan, batch_id, kLinkMaxObs, kept);
 }
 
+Submap submap_from_wire(const LinkClient::WireSubmap& w, int index) {
+  Submap m;
+  m.index = index;
+  const int n = static_cast<int>(w.landmarks.size());
+  const int d = 3 + 2 * n;
+  m.x.resize(d);
+  m.x.head<3>() << w.pose.x, w.pose.y, w.pose.theta;
+  for (int j = 0; j < n; ++j) {
+    const proto::SubmapLandmarkWire& l = w.landmarks[static_cast<std::size_t>(j)];
+    m.x.segment<2>(3 + 2 * j) << l.x_m, l.y_m;
+    m.ids.push_back(l.id);
+    m.confirmed.push_back(l.confirmed);
+  }
+  m.P.resize(d, d);
+  for (int c = 0; c < d; ++c) {
+    for (int r = 0; r <= c; ++r) {
+      m.P(r, c) = m.P(c, r) = w.cov[static_cast<std::size_t>(c * (c + 1) / 2 + r)];
+    }
+  }
+  return m;
+}
+
 namespace {
 
+/// The pose after a prediction input: the filter's mean moves by the motion model alone.
+Pose2<double> moved(const Pose2<double>& x, const RunInput& in) {
+  if (in.increment) {
+    return ekf::compose(x, ekf::PoseIncrement<double>{in.dx_m, in.dy_m, in.dtheta_rad, in.increment_cov});
+  }
+  return ekf::move(x, ekf::Odometry<double>{in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps});
+}
+
 struct InFlight {
+  std::vector<RunInput> moves;  ///< the predictions sent before the batch (RunOptions::record_trace)
   LinkObsBatch batch;
   std::vector<int> truth;  ///< of the batch's observations, in batch order
   std::chrono::steady_clock::time_point sent;
@@ -186,6 +218,31 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   bool noted_truncation = false;
   int not_augmented = 0;
   std::uint32_t next_batch = 0;
+  // Sequential map joining: the device's local maps joined on the host (its CONFIG has the rule).
+  const StepSettings<double> ss = step_settings(o, src.sensor);
+  const bool maps = ss.submap_landmarks > 0 || ss.submap_distance_m > 0 || ss.submap_scans > 0;
+  std::unique_ptr<GlobalMap> global = maps ? make_global_map(o, ss) : nullptr;
+  std::vector<int> id_truth;  // landmark id -> its truth
+  std::uint32_t map_id = 0;
+  std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
+  Pose2<double> last_pose = src.x0;
+  auto hand_over = [&]() {
+    const auto t0 = std::chrono::steady_clock::now();
+    const LinkClient::WireSubmap w = link.receive_submap(map_id);
+    const Submap m = submap_from_wire(w, static_cast<int>(map_id));
+    for (FeatureId id : m.ids) {
+      const auto k = static_cast<std::size_t>(id);
+      if (k >= id_truth.size()) id_truth.resize(k + 1, RunScorer::kUnknown);
+      id_truth[k] = scorer.truth_of(id);
+    }
+    // The step's cost is not timed through a link (round trips are not steps): the device reports
+    // its instruction counts in STATS (geojcbb_qemu --budget gives each local map's largest step).
+    record_join(res.submaps, m, global->join(m), id_truth, 0.0);
+    res.submaps.frames += w.frames;
+    res.submaps.requests += w.requests;
+    link.submap_received(map_id++);
+    res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  };
 
   auto complete = [&]() {
     InFlight& f = flight.front();
@@ -207,13 +264,25 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
       not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
     }
-    if (f.have_truth) {
-      const auto& u = r.pose.cov_upper;
-      Eigen::Matrix3d P;
-      P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
-      scorer.pose(f.t_s, f.true_pose, Pose2<double>{r.pose.x_m, r.pose.y_m, r.pose.theta_rad}, P);
+    const auto& u = r.pose.cov_upper;
+    Eigen::Matrix3d P;
+    P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
+    Pose2<double> x{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
+    if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
+    if (f.have_truth) scorer.pose(f.t_s, f.true_pose, x, P);
+    if (o.record_trace) {
+      for (const RunInput& in : f.moves) {
+        last_pose = moved(last_pose, in);
+        res.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose});
+      }
+      res.trace.push_back({f.t_s, x});
     }
+    last_pose = x;
     res.landmarks = r.pose.landmark_count;
+    if (r.pose.submap_frames > 0) {  // before the hook, which may ask for STATS
+      if (!global) throw LinkError("the device handed over a local map, but this run has no submap rule");
+      hand_over();
+    }
     if (so.hook) so.hook(f.batch, r);
     flight.pop_front();
   };
@@ -230,6 +299,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       } else {
         link.odometry(link_odometry(in));
       }
+      if (o.record_trace) moves.push_back(in);
       continue;
     }
     InFlight f;
@@ -244,6 +314,8 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       noted_truncation = true;
     }
     f.t_s = in.t_s;
+    f.moves = std::move(moves);
+    moves.clear();
     f.have_truth = in.have_truth;
     f.true_pose = in.true_pose;
     f.sent = std::chrono::steady_clock::now();
@@ -252,11 +324,31 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     if (flight.size() >= window) complete();
   }
   while (!flight.empty()) complete();
+  if (o.record_trace) {
+    for (const RunInput& m : moves) {
+      last_pose = moved(last_pose, m);
+      res.trace.push_back({m.increment ? m.t_s : m.t_s + m.dt_s, last_pose});
+    }
+  }
+  if (global) {  // the last local map, closed at the end of the inputs, joined too
+    link.request_submap(map_id);
+    hand_over();
+  }
   if (not_augmented > 0 && so.note) {
     so.note(std::to_string(not_augmented) + " observations were not added to the map: the device's map is full (" +
             std::to_string(caps.max_landmarks) + " landmarks)");
   }
-  return scorer.finish();
+  if (!global) return scorer.finish();
+  RunResult out = scorer.finish();
+  out.landmarks = global->landmarks();
+  for (int k = 0; k < out.landmarks; ++k) {
+    const auto id = static_cast<std::size_t>(global->first_id(k));
+    const int t = id < id_truth.size() ? id_truth[id] : RunScorer::kUnknown;
+    out.map.push_back({global->landmark(k).x(), global->landmark(k).y(), t});
+    out.spurious_in_map += t < 0;
+  }
+  out.map_cov = global->covariance().bottomRightCorner(2 * out.landmarks, 2 * out.landmarks);
+  return out;
 }
 
 }  // namespace

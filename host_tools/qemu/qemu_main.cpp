@@ -1,7 +1,8 @@
 // geojcbb_qemu: the firmware on an emulated Cortex-M4F. Starts QEMU (mps2-an386) with the firmware
 // ELF halted, finds the UART's pty through QMP, opens it, lets the CPU run, handshakes and streams a
-// simulated scenario for each strategy, printing the same score table as the desktop loop
-// (geojcbb_link). With --check every ASSOC_RESULT and POSE is compared, bit for bit, with the same
+// simulated scenario (or, with --log, a recorded log: its first --seconds) for each strategy,
+// printing the same score table as the desktop loop (geojcbb_link). With --submaps the firmware's
+// local maps are handed over the link and joined on the host (docs/submaps.md). With --check every ASSOC_RESULT and POSE is compared, bit for bit, with the same
 // node running in float in this process; with --budget each scan's instruction counts (STATS under
 // -icount) are collected and summarised. Ends with SHUTDOWN: the firmware exits QEMU through
 // semihosting with status 0.
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/mirror.hpp"
 #include "geojcbb_host/qemu.hpp"
 #include "geojcbb_host/run_cli.hpp"
@@ -35,8 +37,21 @@ struct Budget {
   std::vector<std::uint32_t> lost_test;    ///< the lost test, per scan (0: not run)
   std::vector<std::uint32_t> score;        ///< the posterior scoring (inside the rows above), per scan
   std::vector<std::uint32_t> existence;    ///< the landmarks' existence update (inside augment_review), per scan
+  std::vector<std::uint32_t> map_worst;    ///< per local map (--submaps): its scans' largest step
   std::uint32_t hits_before = 0;           ///< the device's budget_hits counter before the scan
   bool started = false;
+  bool map_open = false;
+};
+
+/// The first `seconds` of a recorded run (all of it for 0).
+class FirstSeconds : public RecordedSource {
+ public:
+  FirstSeconds(RunSource& src, double seconds) : RecordedSource(src) {
+    if (seconds <= 0 || inputs_.empty()) return;
+    const double end = inputs_.front().t_s + seconds;
+    inputs_.erase(std::find_if(inputs_.begin(), inputs_.end(), [&](const RunInput& in) { return in.t_s > end; }),
+                  inputs_.end());
+  }
 };
 
 std::uint32_t median(std::vector<std::uint32_t> v) {
@@ -56,8 +71,8 @@ bool matches(const proto::Capabilities& c) {
 
 // One strategy over the link, optionally mirrored by the in-process node with bounds B.
 template <class B>
-RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const RunOptions& o, bool check, bool budget,
-                  int timeout_ms, MirrorReport& mirror_report, Budget& b) {
+RunResult run_one(Transport& port, RunSource& src, const RunOptions& o, bool check, bool budget, int timeout_ms,
+                  MirrorReport& mirror_report, Budget& b) {
   std::unique_ptr<MirrorTransport<B>> mirror;
   if (check) mirror = std::make_unique<MirrorTransport<B>>(port);
   Transport& t = check ? static_cast<Transport&>(*mirror) : port;
@@ -65,8 +80,11 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
   link.hello();  // the client learns the device's capacity; the mirror's node gets its HELLO too
   ScanHook hook = nullptr;
   if (budget) {
-    hook = [&](const LinkObsBatch& batch, const LinkClient::ScanReply&) {
+    hook = [&](const LinkObsBatch& batch, const LinkClient::ScanReply& reply) {
       const proto::Stats st = link.stats();
+      if (!b.map_open) b.map_worst.push_back(0);
+      b.map_worst.back() = std::max(b.map_worst.back(), st.instr_step);
+      b.map_open = reply.pose.submap_frames == 0;  // the map closed with this scan
       b.associate.push_back(st.instr_associate);
       b.step.push_back(st.instr_step);
       b.predict_local.push_back(st.instr_predict_local);
@@ -85,7 +103,11 @@ RunResult run_one(Transport& port, const Scenario& sc, std::uint64_t seed, const
       b.started = true;
     };
   }
-  RunResult r = stream_scenario(link, sc, seed, o, hook);
+  PlainLink pl(link);
+  StreamOptions so;
+  so.hook = hook;
+  src.rewind();
+  RunResult r = stream_run(pl, src, o, so);
   if (mirror) mirror_report = mirror->report();
   return r;
 }
@@ -164,6 +186,12 @@ int run(int argc, char** argv) {
   app.add_option("--machine", q.machine, "QEMU machine: mps2-an386 or netduinoplus2 (the ELF must be built for it)")
       ->default_val(q.machine);
   app.add_option("--scenario", scenario, "scenario JSON file")->default_val(scenario);
+  std::string log_path;
+  double seconds = 0;
+  app.add_option("--log", log_path,
+                 "instead of a scenario: a recorded log (replay's format, e.g. geojcbb_eval convert-victoria-park's), "
+                 "with the noise its lines give");
+  app.add_option("--seconds", seconds, "--log: only its first this many seconds (0: all)")->default_val(0);
   app.add_option("--strategies", names,
                  std::string("strategies, comma separated (") + kPresetsHelp +
                      "; default: the papers' six, PCJCBB and the robust preset PCJCBB+RL)")
@@ -185,6 +213,15 @@ int run(int argc, char** argv) {
   int rc = 0;
   try {
     const Scenario sc = load_scenario(scenario);
+    std::unique_ptr<RunSource> source;
+    std::string source_name = sc.name;
+    if (!log_path.empty()) {
+      replay::LogSource all(replay::read_event_log(log_path), replay::LogNoise{});
+      source = std::make_unique<FirstSeconds>(all, seconds);
+      source_name = log_path + (seconds > 0 ? ", its first " + std::to_string(static_cast<int>(seconds)) + " s" : "");
+    } else {
+      source = std::make_unique<SimSource>(sc, seed, o.max_steps);
+    }
     QemuMachine machine(q);
     // Open the pty before the CPU runs: QEMU drops UART output while nobody holds it.
     PosixSerial port(machine.pty());
@@ -211,8 +248,8 @@ int run(int argc, char** argv) {
       strategies.clear();
     }
     if (!strategies.empty())
-      std::printf("%s, seed %llu, streamed through the emulated controller\n", sc.name.c_str(),
-                  static_cast<unsigned long long>(seed));
+      std::printf("%s%s, streamed through the emulated controller\n", source_name.c_str(),
+                  log_path.empty() ? (", seed " + std::to_string(seed)).c_str() : "");
     if (!strategies.empty()) print_score_header(check ? "bit-for-bit" : "");
     std::vector<Budget> budgets;
     std::ofstream csv;
@@ -227,9 +264,10 @@ int run(int argc, char** argv) {
       MirrorReport mr;
       Budget b;
       const auto t0 = std::chrono::steady_clock::now();
-      const RunResult r = small  ? run_one<SmallControllerBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b)
-                          : dflt ? run_one<DefaultBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b)
-                                 : run_one<LargeControllerBounds>(port, sc, seed, ro, check, budget, timeout_ms, mr, b);
+      RunSource& src = *source;
+      const RunResult r = small  ? run_one<SmallControllerBounds>(port, src, ro, check, budget, timeout_ms, mr, b)
+                          : dflt ? run_one<DefaultBounds>(port, src, ro, check, budget, timeout_ms, mr, b)
+                                 : run_one<LargeControllerBounds>(port, src, ro, check, budget, timeout_ms, mr, b);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::string verdict;
       if (check) {
@@ -239,17 +277,24 @@ int run(int argc, char** argv) {
         if (mr.mismatched != 0 || mr.assoc_results != static_cast<std::uint64_t>(r.scans)) rc = 1;
       }
       print_score_row(m.name(), r, r.scans / secs, verdict);
+      if (r.submaps.maps > 0) {
+        std::printf(
+            "  %-8s %d local maps handed over and joined: %d landmarks in the global map, %d fused, %d joins "
+            "refused, %d wrong joins (labelled data), %d frames\n",
+            m.name().c_str(), r.submaps.maps, r.landmarks, r.submaps.fused, r.submaps.refused, r.submaps.wrong,
+            r.submaps.frames);
+      }
       if (csv.is_open()) {
         for (std::size_t i = 0; i < b.step.size(); ++i) {
-          csv << '"' << sc.name << "\"," << m.name() << ',' << i << ',' << b.observations[i] << ',' << b.associate[i]
-              << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ',' << b.augment_review[i]
-              << ',' << b.lost_test[i] << ',' << b.score[i] << ',' << b.existence[i] << '\n';
+          csv << '"' << source_name << "\"," << m.name() << ',' << i << ',' << b.observations[i] << ','
+              << b.associate[i] << ',' << b.step[i] << ',' << b.predict_local[i] << ',' << b.update[i] << ','
+              << b.augment_review[i] << ',' << b.lost_test[i] << ',' << b.score[i] << ',' << b.existence[i] << '\n';
         }
       }
       budgets.push_back(std::move(b));
     }
     if (budget && !strategies.empty()) {
-      std::printf("instructions per scan (-icount shift=0; median / max over %s's scans)\n", sc.name.c_str());
+      std::printf("instructions per scan (-icount shift=0; median / max over %s's scans)\n", source_name.c_str());
       std::printf("  %-8s %13s %13s %13s %13s %9s %13s %13s\n", "strategy", "assoc median", "assoc max", "step median",
                   "step max", "scans>=20", "assoc20 med", "assoc20 max");
       for (std::size_t k = 0; k < strategies.size(); ++k) {
@@ -274,6 +319,14 @@ int run(int argc, char** argv) {
         line(b.lost_test, "ran the lost test (tracking)");
         line(b.score, "scored candidate poses by their set likelihood (inside the rows above)");
         line(b.existence, "updated the landmarks' existence (log-odds; inside augment_review)");
+      }
+      for (std::size_t k = 0; k < strategies.size(); ++k) {
+        const Budget& b = budgets[k];
+        if (b.map_worst.size() < 2) continue;
+        std::string worst_line;
+        for (const std::uint32_t w : b.map_worst) worst_line += " " + std::to_string(w);
+        std::printf("  %-8s the largest step of each local map [instructions]:%s\n", strategies[k].name().c_str(),
+                    worst_line.c_str());
       }
       for (std::size_t k = 0; k < strategies.size(); ++k) {
         const Budget& b = budgets[k];

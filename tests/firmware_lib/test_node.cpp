@@ -485,3 +485,216 @@ TEST_CASE("node: ODOM_DELTA predicts with the increment and its covariance; a ba
   CHECK(node->slam_step().slam().pose_covariance() == ref->slam().pose_covariance());
   CHECK(node->stats().invalid_field == invalid_before + 1);
 }
+
+// ---------------------------------------------------------------------------------------------
+// The hand-over of a closed local map (docs/submaps.md).
+
+namespace {
+/// HELLO, CONFIG (the map closes after `scans` scans), RESET; the replies dropped.
+void open_submaps(Harness& h, std::uint32_t scans) {
+  h.send(proto::Hello{});
+  proto::Config c;
+  c.local_radius_m = 12.0f;
+  c.max_range_m = 10.0f;
+  c.submap_scans = scans;
+  h.send(c);
+  h.send(proto::Reset{});
+  h.out.clear();
+}
+/// The replies from `at` on that belong to map `id`'s frames, as the host assembles them.
+struct Handed {
+  int frames = 0;
+  std::vector<proto::SubmapLandmarkWire> landmarks;
+  std::vector<float> cov;
+  float x = 0, y = 0, theta = 0;
+};
+Handed assemble(const std::vector<Reply>& r, std::size_t at, std::size_t frames, std::uint32_t id) {
+  Handed h;
+  for (std::size_t k = at; k < at + frames; ++k) {
+    REQUIRE(k < r.size());
+    if (r[k].type == static_cast<std::uint8_t>(proto::MsgType::kSubmap)) {
+      const auto m = decoded<proto::Submap>(r[k]);
+      CHECK(m.map_id == id);
+      CHECK(m.chunk == k - at);
+      CHECK(m.chunks == frames);
+      h.landmarks.resize(m.landmarks);
+      for (std::size_t i = 0; i < m.count; ++i) h.landmarks[m.first + i] = m.items[i];
+      h.x = m.x_m;
+      h.y = m.y_m;
+      h.theta = m.theta_rad;
+    } else {
+      const auto m = decoded<proto::SubmapCov>(r[k]);
+      CHECK(m.map_id == id);
+      CHECK(m.chunk == k - at);
+      CHECK(m.offset == h.cov.size());  // in order, none missing
+      for (std::size_t i = 0; i < m.count; ++i) h.cov.push_back(m.items[i].v);
+    }
+    ++h.frames;
+  }
+  return h;
+}
+proto::Error error_of(const Reply& r) { return decoded<proto::ErrorReport>(r).error; }
+}  // namespace
+
+TEST_CASE("node: a closed local map is handed over whole from the filter, and the next begins only after SUBMAP_ACK") {
+  Harness h;
+  open_submaps(h, 6);
+  for (int k = 0; k < 6; ++k) {
+    h.send(test_odometry());
+    h.send(test_batch(k));
+  }
+  const ekf::Slam<float, NodeB>& s = h.node->slam_step().slam();
+  std::vector<Reply> r = replies(h.out);
+  // 6 x (ASSOC_RESULT, POSE); the sixth POSE announces the frames, which follow at once.
+  const auto pose = decoded<proto::Pose>(r.at(11));
+  for (int k = 0; k < 5; ++k) CHECK(decoded<proto::Pose>(r.at(static_cast<std::size_t>(2 * k + 1))).submap_frames == 0);
+  const int n = s.landmarks();
+  REQUIRE(n >= 3);
+  REQUIRE(pose.submap_frames == proto::submap_frames(static_cast<std::uint32_t>(n)));
+  REQUIRE(r.size() == 12 + pose.submap_frames);
+  const Handed m = assemble(r, 12, pose.submap_frames, 0);
+  // Everything the filter holds, bit for bit (float on both sides): no second copy was made.
+  REQUIRE(static_cast<int>(m.landmarks.size()) == n);
+  CHECK(m.x == s.x(0));
+  CHECK(m.y == s.x(1));
+  CHECK(m.theta == s.x(2));
+  for (int j = 0; j < n; ++j) {
+    CHECK(m.landmarks[static_cast<std::size_t>(j)].id == s.id(j));
+    CHECK(m.landmarks[static_cast<std::size_t>(j)].x_m == s.landmark(j).x());
+    CHECK(m.landmarks[static_cast<std::size_t>(j)].y_m == s.landmark(j).y());
+    CHECK(m.landmarks[static_cast<std::size_t>(j)].confirmed == s.confirmed(j));
+  }
+  const int d = s.dim();
+  REQUIRE(m.cov.size() == proto::submap_cov_entries(static_cast<std::uint32_t>(n)));
+  for (int c = 0; c < d; ++c) {
+    for (int q = 0; q <= c; ++q) {
+      CHECK(m.cov[static_cast<std::size_t>(c * (c + 1) / 2 + q)] == s.cov(q, c));
+      CHECK(ekf::Slam<float, NodeB>::packed_index(q, c) == static_cast<std::size_t>(c * (c + 1) / 2 + q));
+    }
+  }
+
+  // Until SUBMAP_ACK: stream frames are refused (busy) and not applied.
+  const Pose2<float> before = s.pose();
+  const std::uint32_t scans = h.node->stats().scans;
+  const std::uint16_t odo_seq = h.seq;
+  h.out.clear();
+  h.send(test_odometry());
+  h.send(test_batch(6));
+  r = replies(h.out);
+  REQUIRE(r.size() == 2);
+  CHECK(error_of(r[0]) == proto::Error::kBusy);
+  CHECK(error_of(r[1]) == proto::Error::kBusy);
+  CHECK(s.pose().x == before.x);
+  CHECK(h.node->stats().scans == scans);
+  CHECK(s.landmarks() == n);
+
+  // A wrong map id is refused; asked again, the same map comes again, from the same memory.
+  h.out.clear();
+  proto::SubmapAck wrong;
+  wrong.map_id = 1;
+  h.send(wrong);
+  r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  CHECK(decoded<proto::Nack>(r[0]).error == proto::Error::kOutOfRange);
+  h.out.clear();
+  h.out.reserve(1 << 20);  // the sink's own growth is not the node's
+  proto::SubmapAck again;
+  again.send = true;
+  const std::vector<std::uint8_t> again_frame = h.frame(again, h.seq++);
+  CHECK(test::allocations_during([&] { h.send_bytes(again_frame); }) == 0);
+  r = replies(h.out);
+  REQUIRE(r.size() == 1 + pose.submap_frames);
+  CHECK(decoded<proto::Ack>(r[0]).acked_type == static_cast<std::uint8_t>(proto::MsgType::kSubmapAck));
+  const Handed m2 = assemble(r, 1, pose.submap_frames, 0);
+  CHECK(m2.cov == m.cov);
+  CHECK(m2.landmarks.size() == m.landmarks.size());
+
+  // SUBMAP_ACK: the next map begins at the robot (its origin), with the landmarks in view carried.
+  h.out.clear();
+  h.send(proto::SubmapAck{});
+  r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  CHECK(decoded<proto::Ack>(r[0]).acked_type == static_cast<std::uint8_t>(proto::MsgType::kSubmapAck));
+  CHECK(s.x(0) == 0.0f);
+  CHECK(s.x(1) == 0.0f);
+  CHECK(s.x(2) == 0.0f);
+  CHECK(s.landmarks() <= n);
+  for (int j = 0; j < s.landmarks(); ++j) {  // the carried ones keep their ids
+    bool found = false;
+    for (const auto& l : m.landmarks) found = found || l.id == s.id(j);
+    CHECK(found);
+  }
+  // The refused frames, sent again with their own seq, are applied now; the ACK repeated is harmless.
+  h.out.clear();
+  h.send_bytes(h.frame(test_odometry(), odo_seq));
+  h.send_bytes(h.frame(test_batch(6), static_cast<std::uint16_t>(odo_seq + 1)));
+  r = replies(h.out);
+  REQUIRE(r.size() == 2);
+  CHECK(decoded<proto::AssocResultT<24>>(r[0]).batch_id == 106);
+  CHECK(decoded<proto::Pose>(r[1]).submap_frames == 0);
+  CHECK(h.node->stats().scans == scans + 1);
+  h.out.clear();
+  h.send(proto::SubmapAck{});
+  r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].type == static_cast<std::uint8_t>(proto::MsgType::kAck));
+}
+
+TEST_CASE("node: a hand-over survives a reconnection (HELLO) and is dropped by RESET; the host may close a map") {
+  Harness h;
+  open_submaps(h, 4);
+  for (int k = 0; k < 4; ++k) {
+    h.send(test_odometry());
+    h.send(test_batch(k));
+  }
+  const ekf::Slam<float, NodeB>& s = h.node->slam_step().slam();
+  const int n = s.landmarks();
+  const std::uint32_t frames = proto::submap_frames(static_cast<std::uint32_t>(n));
+  REQUIRE(replies(h.out).size() == 8 + frames);
+
+  SUBCASE("a reconnection keeps the pending map: still busy, and it can be asked for again") {
+    h.out.clear();
+    h.send(proto::Hello{});
+    h.send(test_odometry());
+    proto::SubmapAck again;
+    again.send = true;
+    h.send(again);
+    const std::vector<Reply> r = replies(h.out);
+    REQUIRE(r.size() == 3 + frames);
+    CHECK(r[0].type == static_cast<std::uint8_t>(proto::MsgType::kCapabilities));
+    CHECK(error_of(r[1]) == proto::Error::kBusy);
+    CHECK(r[2].type == static_cast<std::uint8_t>(proto::MsgType::kAck));
+    CHECK(static_cast<int>(assemble(r, 3, frames, 0).landmarks.size()) == n);
+  }
+  SUBCASE("RESET drops it: stream frames are taken, and no map is pending") {
+    h.out.clear();
+    h.send(proto::Reset{});
+    h.send(test_odometry());
+    h.send(test_batch(4));
+    h.send(proto::SubmapAck{});
+    const std::vector<Reply> r = replies(h.out);
+    REQUIRE(r.size() == 4);
+    CHECK(r[0].type == static_cast<std::uint8_t>(proto::MsgType::kAck));
+    CHECK(decoded<proto::AssocResultT<24>>(r[1]).batch_id == 104);
+    CHECK(r[2].type == static_cast<std::uint8_t>(proto::MsgType::kPose));
+    CHECK(decoded<proto::Nack>(r[3]).error == proto::Error::kOutOfRange);
+  }
+  SUBCASE("SUBMAP_ACK with send for the current map closes it now (the end of a run)") {
+    h.send(proto::SubmapAck{});  // map 0 taken; map 1 begins
+    h.send(test_odometry());
+    h.send(test_batch(4));
+    h.out.clear();
+    proto::SubmapAck close;
+    close.map_id = 1;
+    close.send = true;
+    h.send(close);
+    const std::vector<Reply> r = replies(h.out);
+    const std::uint32_t f1 = proto::submap_frames(static_cast<std::uint32_t>(s.landmarks()));
+    REQUIRE(r.size() == 1 + f1);
+    CHECK(r[0].type == static_cast<std::uint8_t>(proto::MsgType::kAck));
+    CHECK(static_cast<int>(assemble(r, 1, f1, 1).landmarks.size()) == s.landmarks());
+    h.out.clear();
+    h.send(test_odometry());
+    CHECK(error_of(replies(h.out).at(0)) == proto::Error::kBusy);
+  }
+}

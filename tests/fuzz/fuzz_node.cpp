@@ -112,10 +112,14 @@ struct ReplyChecker {
     } else if constexpr (M::kType == MsgType::kPose) {
       require(m.landmark_count <= NB::kMaxLandmarks);
       landmark_count = m.landmark_count;
+    } else if constexpr (M::kType == MsgType::kSubmap) {  // a hand-over: the map the device holds
+      require(m.landmarks <= NB::kMaxLandmarks && m.chunks == proto::submap_frames(m.landmarks));
+    } else if constexpr (M::kType == MsgType::kSubmapCov) {
+      require(m.offset + m.count <= proto::submap_cov_entries(NB::kMaxLandmarks));
     } else if constexpr (M::kType == MsgType::kHello || M::kType == MsgType::kConfig || M::kType == MsgType::kReset ||
                          M::kType == MsgType::kOdometry || M::kType == MsgType::kObsBatch ||
                          M::kType == MsgType::kPing || M::kType == MsgType::kStatsRequest ||
-                         M::kType == MsgType::kShutdown) {
+                         M::kType == MsgType::kShutdown || M::kType == MsgType::kSubmapAck) {
       require(false);  // host-to-device types are never sent by the device
     }
   }

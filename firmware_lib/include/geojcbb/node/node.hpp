@@ -11,6 +11,12 @@
 //   ODOM_DELTA      predict with a pose increment and its covariance (instead of ODOMETRY)
 //   OBS_BATCH       one SLAM step: ASSOC_RESULT then POSE, or ERROR (nothing changes); then STATS
 //                   when CONFIG's stats_period_scans is N > 0 and this is the N-th scan since the last
+//   hand-over       a scan that closes the local map (CONFIG's submap_* rule) has POSE.submap_frames
+//                   > 0: SUBMAP and SUBMAP_COV frames follow, read in place from the filter (no copy);
+//                   until SUBMAP_ACK every stream frame gets ERROR kBusy and is not applied (the host
+//                   sends it again). SUBMAP_ACK: ACK, then the next map (SlamStep::restart); with
+//                   send, ACK and the same map again (or the current map, closed now: the end of a
+//                   run). RESET and CONFIG drop a pending map; a HELLO (a reconnection) keeps it.
 //   retransmission  a stream frame (ODOMETRY, OBS_BATCH) whose seq is not newer than the last applied
 //                   one since CONFIG/RESET is not applied again; a repeated OBS_BATCH of the last
 //                   applied batch id gets its stored ASSOC_RESULT and POSE again (a host that lost
@@ -300,6 +306,7 @@ class Node {
         break;
       case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
       case proto::MsgType::kRelocalise: e = serve<proto::Relocalise>(f); break;
+      case proto::MsgType::kSubmapAck: e = serve<proto::SubmapAck>(f); break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
       case proto::MsgType::kOdomDelta: e = serve<proto::OdomDelta>(f); break;
@@ -374,7 +381,7 @@ class Node {
   }
 
   void on_message(const proto::Relocalise& m) {
-    if (!running() || !fresh()) return;  // a retransmitted RELOCALISE was applied already
+    if (!running() || !fresh() || busy()) return;  // a retransmitted RELOCALISE was applied already
     const auto& u = m.cov_upper;
     Mat3<T> P;
     P << T(u[0]), T(u[1]), T(u[2]), T(u[1]), T(u[3]), T(u[4]), T(u[2]), T(u[4]), T(u[5]);
@@ -393,7 +400,7 @@ class Node {
   }
 
   void on_message(const proto::Odometry& m) {
-    if (!running() || !fresh()) return;  // a retransmitted ODOMETRY was applied already
+    if (!running() || !fresh() || busy()) return;  // a retransmitted ODOMETRY was applied already
     const std::uint32_t t0 = clock_ ? clock_() : 0;
     const Status st = step_.predict(odometry_from<T>(m));
     last_predict_ = clock_ ? clock_() - t0 : 0;
@@ -407,7 +414,7 @@ class Node {
   /// Out of line: its increment and covariance stay out of handle()'s frame (the call chain's
   /// budget, docs/firmware.md).
   [[gnu::noinline]] void on_message(const proto::OdomDelta& m) {
-    if (!running() || !fresh()) return;  // a retransmitted ODOM_DELTA was applied already
+    if (!running() || !fresh() || busy()) return;  // a retransmitted ODOM_DELTA was applied already
     const std::uint32_t t0 = clock_ ? clock_() : 0;
     const auto& u = m.cov_upper;
     ekf::PoseIncrement<T> d{T(m.dx_m), T(m.dy_m), T(m.dtheta_rad), Mat3<T>::Zero()};
@@ -430,6 +437,7 @@ class Node {
       }
       return;
     }
+    if (busy()) return;
     if (observations_from(m, obs_) != Status::kOk) {
       invalid();
       return;
@@ -464,10 +472,102 @@ class Node {
     p.cov_upper = {static_cast<float>(s.cov(0, 0)), static_cast<float>(s.cov(0, 1)), static_cast<float>(s.cov(0, 2)),
                    static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
     p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
+    handing_over_ = last_.submap_due;
+    p.submap_frames =
+        handing_over_ ? static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(s.landmarks()))) : 0;
     send(p);
     if (stats_period_ != 0 && ++since_stats_ >= stats_period_) {
       since_stats_ = 0;
       send(stats());
+    }
+    if (handing_over_) send_submap();
+  }
+
+  void on_message(const proto::SubmapAck& m) {
+    if (!running()) return;
+    if (!handing_over_) {
+      if (m.send && m.map_id == map_id_) {  // the current map, closed now at this scan boundary
+        handing_over_ = true;
+        ack();
+        send_submap();
+      } else if (have_handed_ && m.map_id + 1 == map_id_ && !m.send) {  // the last map's again (its ACK lost)
+        ack();
+      } else {
+        nack(proto::Error::kOutOfRange);
+      }
+      return;
+    }
+    if (m.map_id != map_id_) {
+      nack(proto::Error::kOutOfRange);
+      return;
+    }
+    if (m.send) {  // frames lost, or a reconnection: the same map again, from the same memory
+      ack();
+      send_submap();
+      return;
+    }
+    if (step_.restart() != Status::kOk) {  // the map stays, pending: the host may ask for it again
+      nack(proto::Error::kInternal);
+      return;
+    }
+    handing_over_ = false;
+    have_handed_ = true;
+    ++map_id_;
+    ack();
+  }
+
+  /// The closed map as SUBMAP then SUBMAP_COV frames, read from the filter in place. Out of line:
+  /// the frames' buffers stay out of handle()'s frame (docs/firmware.md).
+  /// Bound: n / 32 + D (D + 1) / 256 frames for n landmarks, D = 3 + 2 n.
+  [[gnu::noinline]] void send_submap() {
+    const ekf::Slam<T, B>& s = step_.slam();
+    const int n = s.landmarks();
+    const std::uint32_t frames = proto::submap_frames(static_cast<std::uint32_t>(n));
+    std::uint16_t chunk = 0;
+    {
+      proto::Submap m;
+      m.map_id = map_id_;
+      m.chunks = static_cast<std::uint16_t>(frames);
+      m.landmarks = static_cast<std::uint16_t>(n);
+      m.x_m = static_cast<float>(s.x(0));
+      m.y_m = static_cast<float>(s.x(1));
+      m.theta_rad = static_cast<float>(s.x(2));
+      const int per = static_cast<int>(proto::kSubmapLandmarksPerFrame);
+      for (int first = 0; first == 0 || first < n; first += per) {  // <= kMaxLandmarks / 32 + 1
+        m.chunk = chunk++;
+        m.first = static_cast<std::uint16_t>(first);
+        m.count = static_cast<std::uint8_t>(n - first < per ? n - first : per);
+        for (int k = 0; k < m.count; ++k) {  // <= 32
+          proto::SubmapLandmarkWire& w = m.items[static_cast<std::size_t>(k)];
+          const int j = first + k;
+          const Vec2<T> l = s.landmark(j);
+          w.id = s.id(j);
+          w.x_m = static_cast<float>(l.x());
+          w.y_m = static_cast<float>(l.y());
+          w.confirmed = s.confirmed(j);
+        }
+        send(m);
+      }
+    }
+    proto::SubmapCov m;
+    m.map_id = map_id_;
+    m.chunks = static_cast<std::uint16_t>(frames);
+    const int d = s.dim();
+    int r = 0, c = 0;  // the next entry, column by column
+    std::uint32_t offset = 0;
+    while (c < d) {  // <= kPackedSize / 128 + 1 frames
+      m.chunk = chunk++;
+      m.offset = offset;
+      m.count = 0;
+      while (c < d && m.count < proto::kSubmapCovPerFrame) {  // <= 128
+        m.items[m.count++].v = static_cast<float>(s.cov(r, c));
+        ++offset;
+        if (++r > c) {
+          r = 0;
+          ++c;
+        }
+      }
+      send(m);
     }
   }
 
@@ -475,8 +575,15 @@ class Node {
 
   // A new run (start, CONFIG, RESET): stream sequence numbers and the periodic STATS count restart.
   void new_run() {
-    have_stream_seq_ = have_result_ = false;
+    have_stream_seq_ = have_result_ = handing_over_ = have_handed_ = false;
     since_stats_ = 0;
+    map_id_ = 0;
+  }
+  // A stream frame during a hand-over: not applied (its seq not taken), ERROR kBusy.
+  bool busy() {
+    if (!handing_over_) return false;
+    error(proto::Error::kBusy);
+    return true;
   }
   // True when the current stream frame is newer than the last applied one (serial numbers, RFC 1982:
   // a retransmission carries its original seq, never newer).
@@ -554,11 +661,14 @@ class Node {
   proto::EncodedFrame frame_;
   Output out_;
   CounterFn clock_ = nullptr;
+  std::uint32_t map_id_ = 0;  ///< the current local map's number since CONFIG or RESET
   std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, ambiguous_scans_ = 0, last_predict_ = 0,
                 stack_high_water_ = 0;
   std::uint16_t tx_seq_ = 0, rx_seq_ = 0, last_stream_seq_ = 0, stats_period_ = 0, since_stats_ = 0;
   std::uint8_t rx_type_ = 0;
   bool hello_ = false, configured_ = false, reset_ = false, have_stream_seq_ = false, have_result_ = false;
+  bool handing_over_ = false;  ///< the closed map waits for SUBMAP_ACK (stream frames: kBusy)
+  bool have_handed_ = false;   ///< a map was acknowledged since CONFIG or RESET (map_id_ - 1)
 };
 
 }  // namespace geojcbb::node

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "geojcbb_host/mrclam.hpp"
+#include "geojcbb_host/map_merge.hpp"
 #include "geojcbb_host/mrclam_calibration.hpp"
 #include "geojcbb_host/slam_run.hpp"
 
@@ -119,6 +120,10 @@ struct MrclamOptions {
   /// nothing scored is used to fit) or "same" (the log that is replayed).
   std::string calibration = "cross";
   mrclam::CalibrationOptions calibration_options;
+  /// --merge: per data set and strategy, the robots' final maps merged into one with their start
+  /// poses unknown (map_merge.hpp); the merged map, its wrong joins and the starts found are printed.
+  bool merge = false;
+  MergeOptions merge_options;
   /// Runs each replay's inputs (empty: in process, run_inputs); a device over the link needs jobs = 1.
   RunInputsFn runner;
 };

@@ -70,7 +70,11 @@ struct SubmapStats {
   int refused = 0;                   ///< joins refused (their pairs not jointly compatible)
   int wrong = 0;                     ///< fused pairs of two different true landmarks (labelled data)
   std::vector<int> landmarks;        ///< per local map: its landmarks when closed
-  std::vector<double> worst_step_s;  ///< per local map: its slowest step
+  std::vector<double> worst_step_s;  ///< per local map: its slowest step (through a device: round trip)
+  // Through a device (stream_run):
+  int frames = 0;                  ///< SUBMAP and SUBMAP_COV frames received (one sending per map)
+  int requests = 0;                ///< maps asked for again (frames lost)
+  std::vector<double> handover_s;  ///< per map: from its last POSE to the device's ACK of SUBMAP_ACK
 };
 
 struct RunResult {
@@ -93,6 +97,7 @@ struct RunResult {
   int removed_spurious_landmarks = 0;  ///< tentative landmarks from clutter removed
   int removed_true_landmarks = 0;      ///< tentative landmarks of true landmarks removed
   std::vector<MapLandmark> map;        ///< the final map
+  Eigen::MatrixXd map_cov;             ///< its landmarks' joint covariance (2 per landmark, map's order)
   double association_s = 0;            ///< total association time
   double mean_abs_x_m = 0,
          mean_abs_y_m = 0;        ///< over the scans with a true pose

@@ -64,6 +64,14 @@ constexpr int kDefaultSubmapLandmarks = DefaultBounds::kMaxLandmarks - DefaultBo
 /// known-map mode augmentation off and the static gate at its default (off): known landmarks stay.
 StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sensor);
 
+/// The global map of a run with submaps: opt.join with the preset named by opt.join_preset and the
+/// step's confidence. Throws std::invalid_argument for an unknown preset.
+std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSettings<double>& step);
+/// A join's figures added to the run's: maps, offered, fused, declined, refused, the map's size and
+/// its worst step; a fused pair of two different known truths (id_truth[id]: >= 0) is a wrong join.
+void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const std::vector<int>& id_truth,
+                 double worst_step_s);
+
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
 /// the relocaliser, L the loop-closure check, T tentative landmarks isolated, H the hypothesis

@@ -1,6 +1,6 @@
 // host_tools/link: a device program started beside the host tool, for the desktop loop and the
-// tests: `program --pty` runs the device on a new pseudo-terminal and prints its path as the first
-// line of its output ("pty: PATH"). Used by geojcbb_link (without --port) and geojcbb_eval --device.
+// tests: `program [its arguments] --pty` runs the device on a new pseudo-terminal and prints its path
+// as the first line of its output ("pty: PATH"). Used by geojcbb_link (without --port) and geojcbb_eval --device.
 // DeviceLink is a host program's connection: start a device when asked, open a reconnecting
 // LinkSession on the port, and at the end shut a started device down.
 #pragma once

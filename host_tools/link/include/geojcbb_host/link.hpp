@@ -6,6 +6,10 @@
 //                  timeout or a lost reply throws LinkError naming the cause (LinkError::kind).
 //                  The stream frames not yet answered are kept, so after a reconnection they can be
 //                  sent again with their original seq (the device applies a stream frame once).
+//                  A local map handed over (POSE.submap_frames > 0, docs/submaps.md): its SUBMAP and
+//                  SUBMAP_COV frames collected (receive_submap, asking again on a timeout), then
+//                  SUBMAP_ACK and the stream frames the device refused meanwhile (ERROR busy) sent
+//                  again (submap_received).
 //   DesktopDevice  the firmware's node::Node in float on a Transport: what geojcbb_device runs and
 //                  the tests serve on a pty. The Node (and its state) outlives one transport, so a
 //                  port can be closed and another served by the same device.
@@ -21,6 +25,7 @@
 #include <vector>
 
 #include "geojcbb/core/capacity.hpp"
+#include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/protocol/protocol.hpp"
 #include "geojcbb_host/serial.hpp"
 
@@ -71,6 +76,26 @@ class LinkClient {
   /// Waits for the ASSOC_RESULT and POSE of `batch_id`. Replies of earlier batches (duplicates after
   /// a retransmission) are skipped and counted; a later batch's reply first throws kLost.
   ScanReply receive_scan(std::uint32_t batch_id);
+  /// A local map as it came over the link (docs/submaps.md).
+  struct WireSubmap {
+    std::uint32_t map_id = 0;
+    Pose2<double> pose{};  ///< the robot's last pose in the map's frame
+    std::vector<proto::SubmapLandmarkWire> landmarks;
+    std::vector<float> cov;  ///< the upper triangle, column by column: (r, c), r <= c, at c (c + 1) / 2 + r
+    int frames = 0;          ///< frames of one sending
+    int requests = 0;        ///< times the map was asked for again (lost frames, timeouts)
+  };
+  /// Waits for the frames of map `map_id`; when they have not all come within the timeout, asks for
+  /// the map again (SUBMAP_ACK with send), at most `attempts` times, then throws kTimeout.
+  WireSubmap receive_submap(std::uint32_t map_id, int attempts = 3);
+  /// SUBMAP_ACK with send: the device closes its current map `map_id` now and hands it over (the
+  /// end of a run); then receive_submap.
+  void request_submap(std::uint32_t map_id);
+  /// SUBMAP_ACK: the map arrived; the device starts the next one. Then the stream frames it refused
+  /// meanwhile (ERROR busy: batches sent ahead) are sent again, oldest first.
+  void submap_received(std::uint32_t map_id);
+  /// ERROR busy received: stream frames the device refused during a hand-over (sent again).
+  std::uint64_t busy_refusals() const { return busy_; }
   /// STATS_REQUEST, then the next STATS (periodic STATS queued before the request are taken first).
   proto::Stats stats();
   /// The latest STATS received, asked for or periodic (none yet: empty).
@@ -134,14 +159,15 @@ class LinkClient {
   proto::EncodedFrame frame_;
   proto::Capabilities caps_;
   proto::Stats latest_stats_;
-  std::uint64_t stats_received_ = 0, duplicates_ = 0;
+  std::uint64_t stats_received_ = 0, duplicates_ = 0, busy_ = 0;
   std::uint16_t seq_ = 0, error_floor_ = 0;
 };
 
-/// The firmware's device loop (node::Node<float, DesktopBounds>) on the desktop.
+/// The firmware's device loop on the desktop: node::Node<float, DesktopBounds> (the large
+/// firmware's bounds), or with `default_bounds` the default firmware's (DefaultBounds: 96 landmarks).
 class DesktopDevice {
  public:
-  explicit DesktopDevice(std::uint32_t boot_id);
+  explicit DesktopDevice(std::uint32_t boot_id, bool default_bounds = false);
   ~DesktopDevice();
   DesktopDevice(const DesktopDevice&) = delete;
   DesktopDevice& operator=(const DesktopDevice&) = delete;
@@ -163,6 +189,7 @@ struct ServeResult {
 };
 /// Serves a new DesktopDevice on a transport until `stop` is set, a SHUTDOWN arrives or the port
 /// closes (the exception passes).
-ServeResult serve_device(Transport& t, const std::atomic<bool>& stop, std::uint32_t boot_id);
+ServeResult serve_device(Transport& t, const std::atomic<bool>& stop, std::uint32_t boot_id,
+                         bool default_bounds = false);
 
 }  // namespace geojcbb::host

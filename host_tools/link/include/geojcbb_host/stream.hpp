@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "geojcbb_host/global_map.hpp"
 #include "geojcbb_host/link.hpp"
 #include "geojcbb_host/slam_run.hpp"
 
@@ -66,6 +67,11 @@ class ScanLink {
   virtual void relocalise(const proto::Relocalise& r) = 0;
   virtual void send_scan(const LinkObsBatch& b) = 0;
   virtual LinkClient::ScanReply receive_scan(std::uint32_t batch_id) = 0;
+  /// A local map's hand-over (docs/submaps.md): its frames, asking again when they do not come
+  /// (LinkClient::receive_submap); the current map closed at the host's request; the ACK.
+  virtual LinkClient::WireSubmap receive_submap(std::uint32_t map_id) = 0;
+  virtual void request_submap(std::uint32_t map_id) = 0;
+  virtual void submap_received(std::uint32_t map_id) = 0;
   /// The device's CAPABILITIES (capacity, boot id).
   virtual const proto::Capabilities& capabilities() const = 0;
 };
@@ -81,6 +87,9 @@ class PlainLink : public ScanLink {
   void relocalise(const proto::Relocalise& r) override { c_.relocalise(r); }
   void send_scan(const LinkObsBatch& b) override { c_.send_scan(b); }
   LinkClient::ScanReply receive_scan(std::uint32_t id) override { return c_.receive_scan(id); }
+  LinkClient::WireSubmap receive_submap(std::uint32_t id) override { return c_.receive_submap(id); }
+  void request_submap(std::uint32_t id) override { c_.request_submap(id); }
+  void submap_received(std::uint32_t id) override { c_.submap_received(id); }
   const proto::Capabilities& capabilities() const override { return c_.capabilities(); }
 
  private:
@@ -100,12 +109,22 @@ struct StreamOptions {
   std::function<void(const std::string&)> note;
 };
 
+/// A local map from the link as the global map takes it: the state [robot pose, landmarks] and the
+/// covariance (from its packed upper triangle), in double.
+Submap submap_from_wire(const LinkClient::WireSubmap& w, int index);
+
 /// Streams a run's inputs through a device: CONFIG (strategy and options of `o`), RESET, then
 /// ODOMETRY per prediction and OBS_BATCH per scan, each batch truncated to the device's
 /// max_observations (nearest first; RunResult::dropped_observations counts the rest). Replies are
 /// scored with RunScorer as the in-process run is, except that the device does not report which
 /// landmarks left the map (a true landmark counts as mapped once a landmark was made from it) nor
 /// its final map. RunResult::association_s sums each batch's time from sending to its reply.
+/// With RunOptions::submaps (CONFIG's submap_* rule; the in-process default when none is given),
+/// every local map the device hands over is joined into a GlobalMap on the host (as SlamSession
+/// does in process), the last one closed at the host's request when the inputs end; poses are
+/// scored in the global frame, RunResult::submaps and the map are the global map's. With
+/// RunOptions::record_trace, RunResult::trace holds the device's pose after every scan and, between
+/// scans, that pose moved by the odometry sent (the filter's mean moves by the same motion model).
 /// A LinkError kRestart from the link rewinds the source and starts the run again.
 /// Throws LinkError on a link failure, and when a reply does not match its batch.
 RunResult stream_run(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so = {});

@@ -26,9 +26,10 @@ enum class [[nodiscard]] Error : std::uint8_t{
     kSchemaMismatch = 14,       ///< HELLO with another schema hash
     kNotReady = 15,             ///< device: a stream message before CONFIG and RESET
     kInternal = 16,             ///< device: the pipeline refused a valid message
+    kBusy = 17,                 ///< device: a stream frame during a map hand-over (not applied: send it again)
 };
 /// One past the largest value; a u8 on the wire at or above this is not an Error.
-constexpr std::uint8_t kErrorCount = 17;
+constexpr std::uint8_t kErrorCount = 18;
 
 /// Short stable name, for logs and test messages (no allocation).
 constexpr const char* to_string(Error e) {
@@ -50,6 +51,7 @@ constexpr const char* to_string(Error e) {
     case Error::kSchemaMismatch: return "schema-mismatch";
     case Error::kNotReady: return "not-ready";
     case Error::kInternal: return "internal";
+    case Error::kBusy: return "busy";
   }
   return "unknown";
 }

@@ -32,11 +32,14 @@ enum class MsgType : std::uint8_t {
   kReset = 0x08,         ///< host -> device, acknowledged
   kShutdown = 0x09,      ///< host -> device, acknowledged, then the board's shutdown hook
   kRelocalise = 0x0A,    ///< host -> device, stream
+  kSubmapAck = 0x0B,     ///< host -> device, acknowledged
   kOdometry = 0x10,      ///< host -> device, stream
   kObsBatch = 0x11,      ///< host -> device, stream
   kOdomDelta = 0x12,     ///< host -> device, stream
   kAssocResult = 0x20,   ///< device -> host
   kPose = 0x21,          ///< device -> host
+  kSubmap = 0x22,        ///< device -> host, a closed local map's header and landmarks
+  kSubmapCov = 0x23,     ///< device -> host, its covariance
   kStatsRequest = 0x30,  ///< host -> device
   kStats = 0x31,         ///< device -> host
   kError = 0x7F,         ///< device -> host
@@ -582,6 +585,9 @@ struct Pose : Codec<Pose> {
   float theta_rad = 0.0f;
   std::array<float, 6> cov_upper{};  ///< (p00, p01, p02, p11, p12, p22) over (x, y, theta)
   std::uint16_t landmark_count = 0;
+  /// 0, or this scan closed the local map: this many SUBMAP and SUBMAP_COV frames follow, and the
+  /// device takes no stream frame (ERROR kBusy) until SUBMAP_ACK.
+  std::uint16_t submap_frames = 0;
 
   static constexpr auto fields() {
     return std::make_tuple(
@@ -591,10 +597,140 @@ struct Pose : Codec<Pose> {
               "diagonal ≥ 0: the pose reports what the filter holds, the host judges its "
               "consistency",
               detail::kCovUpperNames),
-        field("landmark_count", &Pose::landmark_count));
+        field("landmark_count", &Pose::landmark_count),
+        field("submap_frames", &Pose::submap_frames, range::any(), "frames",
+              "0, or the local map closed with this scan: this many SUBMAP and SUBMAP_COV frames follow, and "
+              "stream frames get ERROR `kBusy` until SUBMAP_ACK"));
   }
   [[nodiscard]] Error rule() const {
     return (cov_upper[0] >= 0.0f && cov_upper[3] >= 0.0f && cov_upper[5] >= 0.0f) ? Error::kOk : Error::kOutOfRange;
+  }
+};
+
+// A local map's hand-over (docs/submaps.md). A map with n landmarks and state dimension
+// D = 3 + 2n travels as ceil(max(n, 1) / kSubmapLandmarksPerFrame) SUBMAP frames (chunks 0, 1, ...)
+// then ceil(D (D + 1) / 2 / kSubmapCovPerFrame) SUBMAP_COV frames (the following chunks): the
+// covariance's upper triangle column by column, (0,0), (0,1), (1,1), (0,2), ..., as the device
+// stores it, read in place. The map's frame is the robot's pose when the map began, which is the
+// previous map's last robot pose (its state's first three and their covariance): the base pose.
+
+/// Landmarks per SUBMAP frame.
+constexpr std::size_t kSubmapLandmarksPerFrame = 32;
+/// Covariance entries per SUBMAP_COV frame.
+constexpr std::size_t kSubmapCovPerFrame = 128;
+
+/// The frames of a hand-over of a map with `landmarks` landmarks.
+constexpr std::uint32_t submap_landmark_frames(std::uint32_t landmarks) {
+  return landmarks == 0 ? 1u
+                        : (landmarks + static_cast<std::uint32_t>(kSubmapLandmarksPerFrame) - 1) /
+                              static_cast<std::uint32_t>(kSubmapLandmarksPerFrame);
+}
+constexpr std::uint32_t submap_cov_entries(std::uint32_t landmarks) {
+  const std::uint32_t d = 3 + 2 * landmarks;
+  return d * (d + 1) / 2;
+}
+constexpr std::uint32_t submap_frames(std::uint32_t landmarks) {
+  return submap_landmark_frames(landmarks) +
+         (submap_cov_entries(landmarks) + static_cast<std::uint32_t>(kSubmapCovPerFrame) - 1) /
+             static_cast<std::uint32_t>(kSubmapCovPerFrame);
+}
+
+struct SubmapLandmarkWire {
+  std::int32_t id = 0;  ///< the landmark's id (ids go on across maps; a carried landmark keeps its id)
+  float x_m = 0.0f;     ///< in the map's frame
+  float y_m = 0.0f;
+  bool confirmed = false;  ///< by its evidence; a tentative one joins only when paired
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("id", &SubmapLandmarkWire::id, range::at_least(0), "", "stable across maps"),
+                           field("x_m", &SubmapLandmarkWire::x_m, range::finite(), "m", "the map's frame"),
+                           field("y_m", &SubmapLandmarkWire::y_m, range::finite(), "m"),
+                           field("confirmed", &SubmapLandmarkWire::confirmed, range::one_of(0, 1)));
+  }
+};
+
+/// SUBMAP, device -> host: a closed local map, its header and landmarks [first, first + count).
+struct Submap : Codec<Submap> {
+  static constexpr MsgType kType = MsgType::kSubmap;
+  static constexpr const char* kName = "SUBMAP";
+  static constexpr const char* kRule = "chunk<chunks,first+count<=landmarks";
+
+  std::uint32_t map_id = 0;     ///< 0, 1, ... since RESET
+  std::uint16_t chunk = 0;      ///< this frame's index in the hand-over
+  std::uint16_t chunks = 1;     ///< the hand-over's frames (SUBMAP and SUBMAP_COV)
+  std::uint16_t landmarks = 0;  ///< n, the map's landmarks
+  std::uint16_t first = 0;      ///< the index of this frame's first landmark
+  float x_m = 0.0f;             ///< the robot's last pose in the map's frame (the state's first three)
+  float y_m = 0.0f;
+  float theta_rad = 0.0f;
+  std::uint8_t count = 0;  ///< <= kSubmapLandmarksPerFrame
+  std::array<SubmapLandmarkWire, kSubmapLandmarksPerFrame> items{};
+
+  static constexpr auto fields() {
+    return std::make_tuple(
+        field("map_id", &Submap::map_id, range::any(), "", "0, 1, ... since RESET"),
+        field("chunk", &Submap::chunk, range::any(), "", "< `chunks`"),
+        field("chunks", &Submap::chunks, range::at_least(2), "frames", "SUBMAP and SUBMAP_COV frames of the map"),
+        field("landmarks", &Submap::landmarks, range::any(), "", "n"),
+        field("first", &Submap::first, range::any(), "", "`first` + `count` ≤ `landmarks`"),
+        field("x_m", &Submap::x_m, range::finite(), "m", "the robot's last pose, the map's frame"),
+        field("y_m", &Submap::y_m, range::finite(), "m"),
+        field("theta_rad", &Submap::theta_rad, range::finite(), "rad"),
+        list("count", &Submap::count, &Submap::items, "landmarks",
+             "≤ 32, and `len` = fixed + item size · count exactly"));
+  }
+  [[nodiscard]] Error rule() const {
+    return chunk < chunks && static_cast<std::uint32_t>(first) + count <= landmarks ? Error::kOk : Error::kOutOfRange;
+  }
+};
+
+struct CovEntryWire {
+  float v = 0.0f;
+  static constexpr auto fields() { return std::make_tuple(field("v", &CovEntryWire::v, range::finite())); }
+};
+
+/// SUBMAP_COV, device -> host: entries [offset, offset + count) of the map's covariance (upper
+/// triangle, column by column).
+struct SubmapCov : Codec<SubmapCov> {
+  static constexpr MsgType kType = MsgType::kSubmapCov;
+  static constexpr const char* kName = "SUBMAP_COV";
+  static constexpr const char* kRule = "chunk<chunks";
+
+  std::uint32_t map_id = 0;
+  std::uint16_t chunk = 0;
+  std::uint16_t chunks = 2;
+  std::uint32_t offset = 0;  ///< the first entry's index in the packed upper triangle
+  std::uint8_t count = 0;    ///< <= kSubmapCovPerFrame
+  std::array<CovEntryWire, kSubmapCovPerFrame> items{};
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("map_id", &SubmapCov::map_id),
+                           field("chunk", &SubmapCov::chunk, range::any(), "", "< `chunks`"),
+                           field("chunks", &SubmapCov::chunks, range::at_least(2), "frames"),
+                           field("offset", &SubmapCov::offset, range::any(), "",
+                                 "of the first entry: column c's row r (r ≤ c) is c (c + 1) / 2 + r"),
+                           list("count", &SubmapCov::count, &SubmapCov::items, "entries",
+                                "≤ 128, and `len` = fixed + item size · count exactly"));
+  }
+  [[nodiscard]] Error rule() const { return chunk < chunks ? Error::kOk : Error::kOutOfRange; }
+};
+
+/// SUBMAP_ACK, host -> device (acknowledged): map `map_id` arrived whole (the device ACKs and starts
+/// the next map), or, with send, send it (the device ACKs, then sends): again from the same memory
+/// while it is pending (frames lost, a reconnection), or, for the current map, closed now (the end of
+/// a run).
+struct SubmapAck : Codec<SubmapAck> {
+  static constexpr MsgType kType = MsgType::kSubmapAck;
+  static constexpr const char* kName = "SUBMAP_ACK";
+
+  std::uint32_t map_id = 0;
+  bool send = false;
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("map_id", &SubmapAck::map_id, range::any(), "",
+                                 "the pending (or current) map's; the last map's again: ACK; else NACK `kOutOfRange`"),
+                           field("send", &SubmapAck::send, range::one_of(0, 1), "",
+                                 "1: send the map (again while pending; the current one: closed now)"));
   }
 };
 
@@ -681,9 +817,9 @@ struct MessageList {
   static constexpr std::size_t kSize = sizeof...(M);
 };
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
-using AllMessages =
-    MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry, OdomDelta,
-                ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, StatsRequest, Stats, ErrorReport>;
+using AllMessages = MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise,
+                                SubmapAck, Odometry, OdomDelta, ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, Submap,
+                                SubmapCov, StatsRequest, Stats, ErrorReport>;
 
 namespace detail {
 template <class... M>
@@ -709,7 +845,7 @@ constexpr std::array<MsgType, AllMessages<>::kSize> kAllMsgTypes = detail::types
 
 /// True when t is a type number of this schema.
 constexpr bool is_known_type(std::uint8_t t) {
-  for (const MsgType k : kAllMsgTypes) {  // <= 16
+  for (const MsgType k : kAllMsgTypes) {  // <= 21
     if (static_cast<std::uint8_t>(k) == t) return true;
   }
   return false;
@@ -717,7 +853,7 @@ constexpr bool is_known_type(std::uint8_t t) {
 
 constexpr const char* to_string(MsgType t) {
   constexpr auto kNames = detail::names_of(AllMessages<>{});
-  for (std::size_t i = 0; i < kAllMsgTypes.size(); ++i) {  // <= 16
+  for (std::size_t i = 0; i < kAllMsgTypes.size(); ++i) {  // <= 21
     if (kAllMsgTypes[i] == t) return kNames[i];
   }
   return "?";
@@ -759,9 +895,10 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 160 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 42 && Stats::kPayloadSize == 96 &&
+                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 44 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
-                  AssocResult::kItemSize == 9,
+                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 13 &&
+                  SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto

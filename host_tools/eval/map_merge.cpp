@@ -1,0 +1,206 @@
+// host_tools/eval: several robots' maps merged with unknown start poses (map_merge.hpp).
+#include "geojcbb_host/map_merge.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "geojcbb/core/chi_square.hpp"
+#include "geojcbb/core/math.hpp"
+#include "geojcbb/reloc/align.hpp"
+
+namespace geojcbb::host {
+
+namespace {
+
+using MergeBounds = Bounds<127, 256, 5, 1000, 256>;
+
+Eigen::Matrix2d rotation(double theta) {
+  Eigen::Matrix2d R;
+  R << std::cos(theta), -std::sin(theta), std::sin(theta), std::cos(theta);
+  return R;
+}
+
+struct Aligner {
+  Observations<double, MergeBounds> obs;
+  reloc::AlignWorkspace<double, MergeBounds> ws;
+  reloc::AlignResult<double, MergeBounds> out;
+};
+
+/// Map b's landmarks in the merged frame through pose x (b's frame there) with covariance Px:
+/// means, and their covariance J_b P_b J_b^T + J_x Px J_x^T (the pose's part correlates them all).
+void transformed(const RobotMap& b, const Pose2<double>& x, const Eigen::Matrix3d& Px, Eigen::VectorXd& l,
+                 Eigen::MatrixXd& P) {
+  const int n = static_cast<int>(b.landmarks.size());
+  const Eigen::Matrix2d R = rotation(x.theta);
+  l.resize(2 * n);
+  Eigen::MatrixXd Jb = Eigen::MatrixXd::Zero(2 * n, 2 * n), Jx(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d q = b.landmarks[static_cast<std::size_t>(i)];
+    const Eigen::Vector2d Rq = R * q;
+    l.segment<2>(2 * i) = Rq + Eigen::Vector2d(x.x, x.y);
+    Jb.block<2, 2>(2 * i, 2 * i) = R;
+    Jx.block<2, 3>(2 * i, 0) << 1, 0, -Rq.y(), 0, 1, Rq.x();
+  }
+  P = Jb * b.P * Jb.transpose() + Jx * Px * Jx.transpose();
+  P = (0.5 * (P + P.transpose())).eval();
+}
+
+}  // namespace
+
+MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o) {
+  MergeResult res;
+  if (maps.empty()) return res;
+  double gate1 = 0;
+  if (chi2_inv(o.confidence, 2, gate1) != Status::kOk) throw std::runtime_error("merge: bad confidence");
+  res.landmarks = maps[0].landmarks;
+  res.P = maps[0].P;
+  res.truth = maps[0].truth;
+  res.aligned.push_back(true);
+  res.start.push_back(Pose2<double>{0, 0, 0});
+  res.pairs.push_back(0);
+  res.why.emplace_back();
+  auto al = std::make_unique<Aligner>();
+  for (std::size_t k = 1; k < maps.size(); ++k) {
+    const RobotMap& b = maps[k];
+    const int n = static_cast<int>(b.landmarks.size()), N = static_cast<int>(res.landmarks.size());
+    if (n > MergeBounds::kMaxObservations || N > MergeBounds::kMaxLandmarks) {
+      throw std::runtime_error("merge: a map larger than the alignment's capacity (127 landmarks, 256 merged)");
+    }
+    res.start.push_back(Pose2<double>{0, 0, 0});
+    res.pairs.push_back(0);
+    res.aligned.push_back(false);
+    res.why.emplace_back();
+    // 1. Pose-free alignment: b's landmarks as range-bearing from its origin, against the merged map.
+    al->obs.clear();
+    al->ws.clear_map();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d q = b.landmarks[static_cast<std::size_t>(i)];
+      const double r2 = std::max(q.squaredNorm(), 1e-6), r = std::sqrt(r2);
+      Eigen::Matrix2d J;
+      J << q.x() / r, q.y() / r, -q.y() / r2, q.x() / r2;
+      const Eigen::Matrix2d R = J * b.P.block<2, 2>(2 * i, 2 * i) * J.transpose();
+      if (al->obs.push(Vec2<double>(r, std::atan2(q.y(), q.x())), (0.5 * (R + R.transpose())).eval()) != Status::kOk)
+        throw std::runtime_error("merge: a landmark that is not an observation");
+    }
+    for (int j = 0; j < N; ++j) {
+      const Status st =
+          al->ws.push_landmark(res.landmarks[static_cast<std::size_t>(j)], res.P.block<2, 2>(2 * j, 2 * j));
+      if (st != Status::kOk) throw std::runtime_error("merge: a merged landmark that is not a Gaussian");
+    }
+    reloc::AlignOptions<double> ao;
+    ao.min_inliers = o.min_inliers;
+    ao.margin_nats = o.margin_nats;
+    ao.gate_d2 = gate1;
+    if (reloc::align(al->obs, ao, al->ws, al->out) != Status::kOk) throw std::runtime_error("merge: align failed");
+    const auto& a = al->out;
+    if (!a.accepted) {
+      res.why.back() = a.ambiguous ? "ambiguous alignment (a rival pose within the margin)"
+                                   : "no supported alignment (" + std::to_string(a.inliers) + " inliers)";
+      continue;
+    }
+    // 2. The pairs' joint test with the full covariance, pruned from the largest d2.
+    Eigen::VectorXd l;
+    Eigen::MatrixXd Pl;
+    transformed(b, a.pose, a.cov, l, Pl);
+    std::vector<std::pair<int, int>> pairs;  // (b's landmark, merged landmark)
+    for (int i = 0; i < n; ++i) {
+      if (a.landmark[static_cast<std::size_t>(i)] >= 0) pairs.emplace_back(i, a.landmark[static_cast<std::size_t>(i)]);
+    }
+    Eigen::VectorXd nu;
+    Eigen::MatrixXd S;
+    auto joint = [&](double& d2, int& worst) {
+      const int p = static_cast<int>(pairs.size());
+      nu.resize(2 * p);
+      S.resize(2 * p, 2 * p);
+      for (int u = 0; u < p; ++u) {
+        const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
+        nu.segment<2>(2 * u) = l.segment<2>(2 * iu) - res.landmarks[static_cast<std::size_t>(ju)];
+        for (int v = 0; v < p; ++v) {
+          const auto [iv, jv] = pairs[static_cast<std::size_t>(v)];
+          S.block<2, 2>(2 * u, 2 * v) = Pl.block<2, 2>(2 * iu, 2 * iv) + res.P.block<2, 2>(2 * ju, 2 * jv);
+        }
+      }
+      const Eigen::LDLT<Eigen::MatrixXd> f(S);
+      const Eigen::VectorXd w = f.solve(nu);
+      d2 = nu.dot(w);
+      worst = 0;
+      double most = -1;
+      for (int u = 0; u < p; ++u) {  // each pair's share of d2
+        const double c = nu.segment<2>(2 * u).dot(w.segment<2>(2 * u));
+        if (c > most) {
+          most = c;
+          worst = u;
+        }
+      }
+    };
+    for (;;) {
+      if (static_cast<int>(pairs.size()) < 3) break;
+      double d2 = 0, limit = 0;
+      int worst = 0;
+      joint(d2, worst);
+      if (chi2_inv(o.confidence, 2 * static_cast<int>(pairs.size()), limit) != Status::kOk)
+        throw std::runtime_error("merge: chi2");
+      if (d2 <= limit) break;
+      pairs.erase(pairs.begin() + worst);
+    }
+    if (static_cast<int>(pairs.size()) < 3) {
+      res.why.back() = "fewer than 3 jointly compatible pairs";
+      continue;
+    }
+    // 3. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'
+    // dropped.
+    const int p = static_cast<int>(pairs.size());
+    const int D = 2 * N + 2 * n;
+    Eigen::VectorXd X(D);
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D, D);
+    for (int j = 0; j < N; ++j) X.segment<2>(2 * j) = res.landmarks[static_cast<std::size_t>(j)];
+    X.tail(2 * n) = l;
+    P.topLeftCorner(2 * N, 2 * N) = res.P;
+    P.bottomRightCorner(2 * n, 2 * n) = Pl;
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * p, D);
+    for (int u = 0; u < p; ++u) {
+      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
+      H.block<2, 2>(2 * u, 2 * N + 2 * iu) = Eigen::Matrix2d::Identity();
+      H.block<2, 2>(2 * u, 2 * ju) = -Eigen::Matrix2d::Identity();
+      const int tb = b.truth[static_cast<std::size_t>(iu)], tm = res.truth[static_cast<std::size_t>(ju)];
+      res.wrong += tb >= 0 && tm >= 0 && tb != tm;
+      if (tm < 0) res.truth[static_cast<std::size_t>(ju)] = tb;
+    }
+    const Eigen::MatrixXd PHt = P * H.transpose();
+    const Eigen::MatrixXd Sc = H * PHt + o.constraint_var_m2 * Eigen::MatrixXd::Identity(2 * p, 2 * p);
+    const Eigen::LDLT<Eigen::MatrixXd> f(Sc);
+    X -= PHt * f.solve(H * X);
+    P -= PHt * f.solve(PHt.transpose());
+    P = (0.5 * (P + P.transpose())).eval();
+    std::vector<int> keep;  // rows of X kept: the merged map's, then b's unpaired landmarks
+    for (int j = 0; j < N; ++j) keep.push_back(j);
+    std::vector<bool> paired(static_cast<std::size_t>(n), false);
+    for (const auto& q : pairs) paired[static_cast<std::size_t>(q.first)] = true;
+    for (int i = 0; i < n; ++i) {
+      if (!paired[static_cast<std::size_t>(i)]) keep.push_back(N + i);
+    }
+    const int K = static_cast<int>(keep.size());
+    res.landmarks.resize(static_cast<std::size_t>(K));
+    res.P.resize(2 * K, 2 * K);
+    for (int u = 0; u < K; ++u) {
+      res.landmarks[static_cast<std::size_t>(u)] = X.segment<2>(2 * keep[static_cast<std::size_t>(u)]);
+      for (int v = 0; v < K; ++v) {
+        res.P.block<2, 2>(2 * u, 2 * v) =
+            P.block<2, 2>(2 * keep[static_cast<std::size_t>(u)], 2 * keep[static_cast<std::size_t>(v)]);
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      if (!paired[static_cast<std::size_t>(i)]) res.truth.push_back(b.truth[static_cast<std::size_t>(i)]);
+    }
+    res.aligned.back() = true;
+    res.start.back() = a.pose;
+    res.pairs.back() = p;
+    res.fused += p;
+  }
+  return res;
+}
+
+}  // namespace geojcbb::host

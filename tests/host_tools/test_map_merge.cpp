@@ -1,0 +1,90 @@
+// Several robots' maps merged with their starts unknown (map_merge.hpp, docs/submaps.md): the starts
+// are found from the maps alone, each landmark seen by several robots becomes one, no two different
+// landmarks are fused; a map that aligns two ways equally well (a regular grid) is kept apart rather
+// than guessed; a map with nothing in common is kept apart.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include "geojcbb_host/map_merge.hpp"
+
+using namespace geojcbb;
+using namespace geojcbb::host;
+
+namespace {
+// The landmarks `which` of `world`, seen from a robot that started at `start`, in its own frame, with
+// independent noise of std sigma on each coordinate (and that covariance).
+RobotMap seen_from(const std::vector<Eigen::Vector2d>& world, const std::vector<int>& which, const Pose2<double>& start,
+                   double sigma, std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, sigma);
+  RobotMap m;
+  const double c = std::cos(start.theta), s = std::sin(start.theta);
+  for (int i : which) {
+    const Eigen::Vector2d d = world[static_cast<std::size_t>(i)] - Eigen::Vector2d(start.x, start.y);
+    m.landmarks.emplace_back(c * d.x() + s * d.y() + n(rng), -s * d.x() + c * d.y() + n(rng));
+    m.truth.push_back(i);
+  }
+  const int k = static_cast<int>(which.size());
+  m.P = Eigen::MatrixXd::Identity(2 * k, 2 * k) * sigma * sigma;
+  return m;
+}
+}  // namespace
+
+TEST_CASE("merge: five robots' maps with unknown starts become one map, the starts found") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  std::vector<Eigen::Vector2d> world;
+  for (int i = 0; i < 15; ++i) world.emplace_back(u(rng), u(rng));
+  const std::vector<Pose2<double>> starts{{-4, -4, 0.3}, {3, -2, 2.0}, {0, 4, -1.2}, {-2, 1, 3.0}, {4, 4, -2.5}};
+  std::vector<RobotMap> maps;
+  std::uniform_int_distribution<int> drop(0, 14);
+  for (const Pose2<double>& s : starts) {
+    std::vector<int> which;
+    const int a = drop(rng), b = drop(rng);  // each robot misses up to two landmarks
+    for (int i = 0; i < 15; ++i)
+      if (i != a && i != b) which.push_back(i);
+    maps.push_back(seen_from(world, which, s, 0.03, rng));
+  }
+  const MergeResult m = merge_maps(maps);
+  CHECK(m.landmarks.size() == 15);
+  CHECK(m.wrong == 0);
+  for (std::size_t k = 1; k < starts.size(); ++k) {
+    CAPTURE(k);
+    REQUIRE(m.aligned[k]);
+    // Robot k's start in robot 0's frame.
+    const Pose2<double>& a = starts[0];
+    const Pose2<double>& b = starts[k];
+    const double c = std::cos(a.theta), s = std::sin(a.theta);
+    const double tx = c * (b.x - a.x) + s * (b.y - a.y), ty = -s * (b.x - a.x) + c * (b.y - a.y);
+    CHECK(std::hypot(m.start[k].x - tx, m.start[k].y - ty) < 0.1);
+    CHECK(std::abs(wrap_angle(m.start[k].theta - wrap_angle(b.theta - a.theta))) < 0.02);
+  }
+  // Every merged landmark is one true landmark, near it.
+  for (std::size_t j = 0; j < m.landmarks.size(); ++j) {
+    const Eigen::Vector2d w = world[static_cast<std::size_t>(m.truth[j])];
+    const double c = std::cos(starts[0].theta), s = std::sin(starts[0].theta);
+    const Eigen::Vector2d d = w - Eigen::Vector2d(starts[0].x, starts[0].y);
+    CHECK((m.landmarks[j] - Eigen::Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y())).norm() < 0.1);
+  }
+}
+
+TEST_CASE("merge: a map that fits two ways (a regular grid) or not at all is kept apart, not guessed") {
+  std::mt19937 rng(3);
+  std::vector<Eigen::Vector2d> grid;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) grid.emplace_back(3.0 * i, 3.0 * j);
+  std::vector<int> all(16);
+  for (int i = 0; i < 16; ++i) all[static_cast<std::size_t>(i)] = i;
+  std::vector<RobotMap> maps{seen_from(grid, all, {0, 0, 0}, 0.02, rng),
+                             seen_from(grid, {0, 1, 2, 4, 5, 6, 8, 9, 10}, {1, 1, 0.4}, 0.02, rng)};
+  // Far away and unlike: nothing in common.
+  std::vector<Eigen::Vector2d> other{{100, 100}, {104, 101}, {101, 107}, {109, 103}, {103, 110}, {108, 108}};
+  maps.push_back(seen_from(other, {0, 1, 2, 3, 4, 5}, {100, 100, 0}, 0.02, rng));
+  const MergeResult m = merge_maps(maps);
+  CHECK_FALSE(m.aligned[1]);  // a 3x3 sub-grid fits the 4x4 grid in four places
+  CHECK(m.why[1].find("ambiguous") != std::string::npos);
+  CHECK_FALSE(m.aligned[2]);
+  CHECK(m.wrong == 0);
+  CHECK(m.landmarks.size() == 16);
+}
