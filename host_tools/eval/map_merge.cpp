@@ -4,6 +4,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 
@@ -97,11 +98,15 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
     if (reloc::align(al->obs, ao, al->ws, al->out) != Status::kOk) throw std::runtime_error("merge: align failed");
     const auto& a = al->out;
     if (!a.accepted) {
-      res.why.back() = a.ambiguous ? "ambiguous alignment (a rival pose within the margin)"
-                                   : "no supported alignment (" + std::to_string(a.inliers) + " inliers)";
+      char d[160];
+      std::snprintf(d, sizeof d, "%d inliers at (%.2f, %.2f, %.2f), rival %d, %.1f vs %.1f nats", a.inliers, a.pose.x,
+                    a.pose.y, a.pose.theta, a.rival_inliers, a.score, a.rival_score);
+      res.why.back() =
+          (a.ambiguous ? "ambiguous alignment (a rival pose within the margin): " : "no supported alignment: ") +
+          std::string(d);
       continue;
     }
-    // 2. The pairs' joint test with the full covariance, pruned from the largest d2.
+    // 2. The pairs' joint test with the full covariance: refused when they fail.
     Eigen::VectorXd l;
     Eigen::MatrixXd Pl;
     transformed(b, a.pose, a.cov, l, Pl);
@@ -109,45 +114,27 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
     for (int i = 0; i < n; ++i) {
       if (a.landmark[static_cast<std::size_t>(i)] >= 0) pairs.emplace_back(i, a.landmark[static_cast<std::size_t>(i)]);
     }
-    Eigen::VectorXd nu;
-    Eigen::MatrixXd S;
-    auto joint = [&](double& d2, int& worst) {
-      const int p = static_cast<int>(pairs.size());
-      nu.resize(2 * p);
-      S.resize(2 * p, 2 * p);
-      for (int u = 0; u < p; ++u) {
-        const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
-        nu.segment<2>(2 * u) = l.segment<2>(2 * iu) - res.landmarks[static_cast<std::size_t>(ju)];
-        for (int v = 0; v < p; ++v) {
-          const auto [iv, jv] = pairs[static_cast<std::size_t>(v)];
-          S.block<2, 2>(2 * u, 2 * v) = Pl.block<2, 2>(2 * iu, 2 * iv) + res.P.block<2, 2>(2 * ju, 2 * jv);
-        }
+    // The pairs' constraints jointly: nu = l'_i - m_j, S = P'_ii' + P_jj' (the maps are independent).
+    const int np = static_cast<int>(pairs.size());
+    Eigen::VectorXd nu(2 * np);
+    Eigen::MatrixXd S(2 * np, 2 * np);
+    for (int u = 0; u < np; ++u) {
+      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
+      nu.segment<2>(2 * u) = l.segment<2>(2 * iu) - res.landmarks[static_cast<std::size_t>(ju)];
+      for (int v = 0; v < np; ++v) {
+        const auto [iv, jv] = pairs[static_cast<std::size_t>(v)];
+        S.block<2, 2>(2 * u, 2 * v) = Pl.block<2, 2>(2 * iu, 2 * iv) + res.P.block<2, 2>(2 * ju, 2 * jv);
       }
-      const Eigen::LDLT<Eigen::MatrixXd> f(S);
-      const Eigen::VectorXd w = f.solve(nu);
-      d2 = nu.dot(w);
-      worst = 0;
-      double most = -1;
-      for (int u = 0; u < p; ++u) {  // each pair's share of d2
-        const double c = nu.segment<2>(2 * u).dot(w.segment<2>(2 * u));
-        if (c > most) {
-          most = c;
-          worst = u;
-        }
-      }
-    };
-    for (;;) {
-      if (static_cast<int>(pairs.size()) < 3) break;
-      double d2 = 0, limit = 0;
-      int worst = 0;
-      joint(d2, worst);
-      if (chi2_inv(o.confidence, 2 * static_cast<int>(pairs.size()), limit) != Status::kOk)
-        throw std::runtime_error("merge: chi2");
-      if (d2 <= limit) break;
-      pairs.erase(pairs.begin() + worst);
     }
-    if (static_cast<int>(pairs.size()) < 3) {
-      res.why.back() = "fewer than 3 jointly compatible pairs";
+    const double d2 = nu.dot(Eigen::LDLT<Eigen::MatrixXd>(S).solve(nu));
+    double limit = 0;
+    if (chi2_inv(o.confidence, 2 * static_cast<int>(pairs.size()), limit) != Status::kOk)
+      throw std::runtime_error("merge: chi2");
+    if (!(d2 <= limit)) {  // refused, not pruned into agreement: a subset of any pairing passes
+      char d[120];
+      std::snprintf(d, sizeof d, "the alignment's %zu pairs are not jointly compatible (d2 %.1f > %.1f)", pairs.size(),
+                    d2, limit);
+      res.why.back() = d;
       continue;
     }
     // 3. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'

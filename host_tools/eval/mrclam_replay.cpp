@@ -240,7 +240,8 @@ void print_merge(int dataset, const std::string& strategy, const std::vector<Mer
   for (std::size_t k = 1; k < robots.size(); ++k) {
     const Pose2<double> truth = relative(robots[0].x0, robots[k].x0);
     if (!m.aligned[k]) {
-      std::printf("  robot %d: not joined: %s\n", robots[k].robot, m.why[k].c_str());
+      std::printf("  robot %d: not joined: %s (its true start (%.2f, %.2f, %.2f))\n", robots[k].robot, m.why[k].c_str(),
+                  truth.x, truth.y, truth.theta);
       starts.push_back({{"robot", robots[k].robot}, {"found", false}, {"why", m.why[k]}});
       continue;
     }

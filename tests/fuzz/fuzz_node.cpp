@@ -1,6 +1,6 @@
-// tests/fuzz: libFuzzer target for the device loop (node::Node<float, SmallControllerBounds>) as a
+// tests/fuzz: libFuzzer target for the device loop (node::Node<float>, the small bounds) as a
 // state machine. The input is a program: each op byte picks a frame (HELLO, CONFIG, RESET, ODOMETRY,
-// OBS_BATCH, PING, STATS_REQUEST, SHUTDOWN, a retransmission, a seq jump, a corrupted or truncated
+// OBS_BATCH, PING, STATS_REQUEST, SHUTDOWN, SUBMAP_ACK, a retransmission, a seq jump, a corrupted or truncated
 // frame, a frame with a valid CRC and a poisoned field, garbage), built with the protocol's encoders
 // from the following bytes, and fed whole or one byte at a time. After every byte or frame: counters
 // never decrease and stay consistent, every reply is a valid frame that decodes (Decoder + dispatch),
@@ -26,7 +26,10 @@
 namespace {
 
 using namespace geojcbb;
-using NB = SmallControllerBounds;
+// The small controller's capacity, as a type of its own: OptionalStages then compiles the optional
+// stages in (SmallControllerBounds' image leaves the window and the hand-over out), so the fuzzer
+// reaches them.
+using NB = Bounds<16, 24, 4, 2000, 33>;
 using Node = node::Node<float, NB>;
 constexpr int kMaxObs = NB::kMaxObservations;
 
@@ -235,7 +238,8 @@ struct Session {
   }
 
   /// A whole valid frame: the device must take it (frames_ok + 1) and answer at most 3 frames
-  /// (ASSOC_RESULT, POSE, STATS); unknown-type and invalid-field counts come with an ERROR.
+  /// (ASSOC_RESULT, POSE, STATS) and a local map's hand-over (at most its frames at full capacity);
+  /// unknown-type and invalid-field counts come with an ERROR.
   void feed_frame(const proto::EncodedFrame& f) {
     const bool was_clean = clean;
     const proto::Stats before = node.stats();
@@ -243,7 +247,7 @@ struct Session {
     feed(f.bytes.data(), f.size);
     const proto::Stats now = node.stats();
     if (was_clean) require(now.frames_ok == before.frames_ok + 1);
-    require(rc.replies - replies_before <= 3);
+    require(rc.replies - replies_before <= 3 + proto::submap_frames(NB::kMaxLandmarks));
     if (now.unknown_type + now.invalid_field > before.unknown_type + before.invalid_field) {
       require(rc.replies > replies_before);
     }
@@ -306,7 +310,10 @@ proto::Config config_from(Input& in) {
     c.landmark_reserve_nats = static_cast<float>(in.u8()) * 0.1f;
     c.max_tentative_reviews = in.u8();
   }
-  if (which & 128) c.stats_period_scans = static_cast<std::uint16_t>(in.u8() % 4);
+  if (which & 128) {
+    c.stats_period_scans = static_cast<std::uint16_t>(in.u8() % 4);
+    c.submap_scans = in.u8() % 6;  // a local map closed and handed over every few scans
+  }
   return c;
 }
 
@@ -461,7 +468,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           default: s.send_poisoned(batch_from(in, ++batch_id), in); break;
         }
         break;
-      default: {  // a frame of another type (device-to-host or unknown) with a random payload
+      default: {  // SUBMAP_ACK; or a frame of another type (device-to-host or unknown) with a random payload
+        if (op & 0x40) {
+          proto::SubmapAck a;
+          a.map_id = in.u8() % 4;
+          a.send = (in.u8() & 1) != 0;
+          s.send(a);
+          break;
+        }
         std::array<std::uint8_t, 64> p{};
         const std::size_t n = in.u8() % p.size();
         for (std::size_t i = 0; i < n; ++i) p[i] = in.u8();  // <= 63

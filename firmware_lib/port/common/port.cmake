@@ -29,11 +29,14 @@ function(geojcbb_port_link target)
 endfunction()
 
 # geojcbb_port_firmware(NAME BOARD lib BOUNDS type FLASH_ORIGIN addr FLASH bytes RAM_ORIGIN addr RAM bytes
-#                       STACK bytes)
+#                       STACK bytes [OPTIMIZE flags...] [DEFINES definitions...])
 # builds NAME.elf: port/common's main loop with the node at `type` (a geojcbb::Bounds) on board `lib`.
 function(geojcbb_port_firmware name)
-  cmake_parse_arguments(F "" "BOARD;BOUNDS;FLASH_ORIGIN;FLASH;RAM_ORIGIN;RAM;STACK" "OPTIMIZE" ${ARGN})
+  cmake_parse_arguments(F "" "BOARD;BOUNDS;FLASH_ORIGIN;FLASH;RAM_ORIGIN;RAM;STACK" "OPTIMIZE;DEFINES" ${ARGN})
   add_executable(${name} ${GEOJCBB_PORT_COMMON_DIR}/main.cpp)
+  if(F_DEFINES)  # the image's own choices (e.g. GEOJCBB_WITHOUT_HYPOTHESES, core/capacity.hpp)
+    target_compile_definitions(${name} PRIVATE ${F_DEFINES})
+  endif()
   if(F_OPTIMIZE)  # after the build type's flags, so it wins (e.g. -O2 where -O3's unrolling overflows flash)
     target_compile_options(${name} PRIVATE ${F_OPTIMIZE})
   endif()

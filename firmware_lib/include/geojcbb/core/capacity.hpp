@@ -47,17 +47,30 @@ using DefaultBounds = Bounds<24, 32, 5, 4000, 96>;
 using SmallControllerBounds = Bounds<16, 24, 4, 2000, 32>;
 using LargeControllerBounds = Bounds<24, 64, 5, 20000, 200>;
 
+/// An image may leave the hypothesis window and clusters first out at every bounds: the 128 KiB
+/// default Cortex-M4F image does (its port defines GEOJCBB_WITHOUT_HYPOTHESES), to make room for the
+/// local map's hand-over (docs/firmware.md, "Configurations").
+#ifdef GEOJCBB_WITHOUT_HYPOTHESES
+inline constexpr bool kImageHypotheses = false;
+#else
+inline constexpr bool kImageHypotheses = true;
+#endif
+
 /// The optional stages a configuration compiles in. The hypothesis window and clusters first
-/// (StepSettings::hypothesis_rivals, cluster_first: about 7 KB of Cortex-M4 code) are left out of the
-/// small controller's image, which cannot hold them and the rest in 128 KiB of flash; there
-/// node::SlamStep::configure refuses their options (kInvalidInput), on the device and on the host.
+/// (StepSettings::hypothesis_rivals, cluster_first: about 7 KB of Cortex-M4 code) and the local
+/// map's hand-over (StepSettings::submap_*, node::Node's SUBMAP frames, ekf::Slam::restart: about
+/// 10 KB) are left out of the small controller's image, which cannot hold them and the rest in
+/// 128 KiB of flash; there node::SlamStep::configure refuses their options (kInvalidInput), on the
+/// device and on the host.
 template <class B>
 struct OptionalStages {
-  static constexpr bool kHypotheses = true;  ///< the hypothesis window and clusters first
+  static constexpr bool kHypotheses = kImageHypotheses;  ///< the hypothesis window and clusters first
+  static constexpr bool kHandOver = true;                ///< local maps closed and handed over
 };
 template <>
 struct OptionalStages<SmallControllerBounds> {
   static constexpr bool kHypotheses = false;
+  static constexpr bool kHandOver = false;
 };
 
 }  // namespace geojcbb

@@ -176,7 +176,7 @@ class Slam {
   /// the mount are kept.  O(kept^2), in place.
   /// @return as reset(); kInvalidInput for kept out of range or indices not increasing in range.
   ///         Nothing changes unless kOk.
-  [[nodiscard]] Status restart(const Mat3<T>& P0, const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
+  [[nodiscard, gnu::cold]] Status restart(const Mat3<T>& P0, const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
     const Status s = check_pose_prior(Pose2<T>{T(0), T(0), T(0)}, P0);
     if (s != Status::kOk) return s;
     if (kept < 0 || kept > landmarks()) return Status::kInvalidInput;
@@ -841,7 +841,7 @@ class Slam {
   /// restart()'s change of frame: every landmark, its covariance (with the pose's, then zeroed) and
   /// its first estimate expressed in the robot's frame, the pose at the origin. Each landmark block
   /// is read once, before it is written; the pose rows only at the end.  O(n^2)
-  [[gnu::noinline]] void reanchor();
+  [[gnu::noinline, gnu::cold]] void reanchor();
   /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
   /// record. @return its id
   FeatureId add_landmark(const Vec2<T>& l, bool known = false) {

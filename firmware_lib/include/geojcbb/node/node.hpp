@@ -306,7 +306,13 @@ class Node {
         break;
       case proto::MsgType::kReset: e = serve<proto::Reset>(f); break;
       case proto::MsgType::kRelocalise: e = serve<proto::Relocalise>(f); break;
-      case proto::MsgType::kSubmapAck: e = serve<proto::SubmapAck>(f); break;
+      case proto::MsgType::kSubmapAck:  // a device without the hand-over does not take it
+        if constexpr (OptionalStages<B>::kHandOver) {
+          e = serve<proto::SubmapAck>(f);
+        } else {
+          e = proto::Error::kUnknownType;
+        }
+        break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
       case proto::MsgType::kOdomDelta: e = serve<proto::OdomDelta>(f); break;
@@ -350,7 +356,7 @@ class Node {
     send(p);
   }
 
-  void on_message(const proto::Config& m) {
+  [[gnu::cold]] void on_message(const proto::Config& m) {
     if (!ready()) return;
     settings_ = kDefaultSettings;  // an option CONFIG does not carry keeps its default
     config_wire::settings_from(m, settings_, std::make_index_sequence<config_wire::kFieldCount>{});
@@ -480,10 +486,12 @@ class Node {
       since_stats_ = 0;
       send(stats());
     }
-    if (handing_over_) send_submap();
+    if constexpr (OptionalStages<B>::kHandOver) {
+      if (handing_over_) send_submap();
+    }
   }
 
-  void on_message(const proto::SubmapAck& m) {
+  [[gnu::cold]] void on_message(const proto::SubmapAck& m) {
     if (!running()) return;
     if (!handing_over_) {
       if (m.send && m.map_id == map_id_) {  // the current map, closed now at this scan boundary
@@ -516,50 +524,59 @@ class Node {
     ack();
   }
 
-  /// The closed map as SUBMAP then SUBMAP_COV frames, read from the filter in place. Out of line:
-  /// the frames' buffers stay out of handle()'s frame (docs/firmware.md).
-  /// Bound: n / 32 + D (D + 1) / 256 frames for n landmarks, D = 3 + 2 n.
-  [[gnu::noinline]] void send_submap() {
+  /// The closed map as SUBMAP then SUBMAP_COV frames, read from the filter in place. Two functions out
+  /// of line: each frame's message is on the stack of its own (within the 512-byte frame limit), out
+  /// of handle()'s frame (docs/firmware.md).
+  /// Bound: n / 16 + 1 + D (D + 1) / 192 + 1 frames for n landmarks, D = 3 + 2 n.
+  [[gnu::cold]] void send_submap() {
+    const std::uint16_t frames =
+        static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(step_.slam().landmarks())));
+    send_submap_cov(send_submap_landmarks(frames), frames);
+  }
+  /// The SUBMAP frames (chunks 0 ...); returns the next chunk's index.
+  [[gnu::noinline, gnu::cold]] std::uint16_t send_submap_landmarks(std::uint16_t frames) {
     const ekf::Slam<T, B>& s = step_.slam();
     const int n = s.landmarks();
-    const std::uint32_t frames = proto::submap_frames(static_cast<std::uint32_t>(n));
     std::uint16_t chunk = 0;
-    {
-      proto::Submap m;
-      m.map_id = map_id_;
-      m.chunks = static_cast<std::uint16_t>(frames);
-      m.landmarks = static_cast<std::uint16_t>(n);
-      m.x_m = static_cast<float>(s.x(0));
-      m.y_m = static_cast<float>(s.x(1));
-      m.theta_rad = static_cast<float>(s.x(2));
-      const int per = static_cast<int>(proto::kSubmapLandmarksPerFrame);
-      for (int first = 0; first == 0 || first < n; first += per) {  // <= kMaxLandmarks / 32 + 1
-        m.chunk = chunk++;
-        m.first = static_cast<std::uint16_t>(first);
-        m.count = static_cast<std::uint8_t>(n - first < per ? n - first : per);
-        for (int k = 0; k < m.count; ++k) {  // <= 32
-          proto::SubmapLandmarkWire& w = m.items[static_cast<std::size_t>(k)];
-          const int j = first + k;
-          const Vec2<T> l = s.landmark(j);
-          w.id = s.id(j);
-          w.x_m = static_cast<float>(l.x());
-          w.y_m = static_cast<float>(l.y());
-          w.confirmed = s.confirmed(j);
-        }
-        send(m);
+    proto::Submap m;
+    m.map_id = map_id_;
+    m.chunks = frames;
+    m.landmarks = static_cast<std::uint16_t>(n);
+    m.x_m = static_cast<float>(s.x(0));
+    m.y_m = static_cast<float>(s.x(1));
+    m.theta_rad = static_cast<float>(s.x(2));
+    const int per = static_cast<int>(proto::kSubmapLandmarksPerFrame);
+    for (int first = 0; first == 0 || first < n; first += per) {  // <= kMaxLandmarks / 16 + 1
+      m.chunk = chunk++;
+      m.first = static_cast<std::uint16_t>(first);
+      m.count = static_cast<std::uint8_t>(n - first < per ? n - first : per);
+      for (int k = 0; k < m.count; ++k) {  // <= 16
+        proto::SubmapLandmarkWire& w = m.items[static_cast<std::size_t>(k)];
+        const int j = first + k;
+        const Vec2<T> l = s.landmark(j);
+        w.id = s.id(j);
+        w.x_m = static_cast<float>(l.x());
+        w.y_m = static_cast<float>(l.y());
+        w.confirmed = s.confirmed(j);
       }
+      send(m);
     }
+    return chunk;
+  }
+  /// The SUBMAP_COV frames from chunk `chunk` on: the upper triangle, column by column.
+  [[gnu::noinline, gnu::cold]] void send_submap_cov(std::uint16_t chunk, std::uint16_t frames) {
+    const ekf::Slam<T, B>& s = step_.slam();
     proto::SubmapCov m;
     m.map_id = map_id_;
-    m.chunks = static_cast<std::uint16_t>(frames);
+    m.chunks = frames;
     const int d = s.dim();
     int r = 0, c = 0;  // the next entry, column by column
     std::uint32_t offset = 0;
-    while (c < d) {  // <= kPackedSize / 128 + 1 frames
+    while (c < d) {  // <= kPackedSize / 96 + 1 frames
       m.chunk = chunk++;
       m.offset = offset;
       m.count = 0;
-      while (c < d && m.count < proto::kSubmapCovPerFrame) {  // <= 128
+      while (c < d && m.count < proto::kSubmapCovPerFrame) {  // <= 96
         m.items[m.count++].v = static_cast<float>(s.cov(r, c));
         ++offset;
         if (++r > c) {

@@ -55,11 +55,13 @@ class SlamStep {
   /// Builds the strategy's configuration and the augmentation gate.
   /// @return kOk; kInvalidInput for bad parameters (a bad view or policy too); statuses of
   ///         make_strategy / chi2_inv. No state change unless kOk.
-  [[nodiscard]] Status configure(const StepSettings<T>& s) {
+  [[nodiscard, gnu::cold]] Status configure(const StepSettings<T>& s) {
     // Every option's range, besides the preset (make_strategy refuses the same settings below).
     if (!in_range(s)) return Status::kInvalidInput;
     // A configuration without the window and clusters first (OptionalStages) refuses their options.
     if (!OptionalStages<B>::kHypotheses && (s.hypothesis_rivals > 0 || s.cluster_first)) return Status::kInvalidInput;
+    if (!OptionalStages<B>::kHandOver && (s.submap_landmarks > 0 || s.submap_distance_m > 0 || s.submap_scans > 0))
+      return Status::kInvalidInput;
     double gate = 0;
     Status st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
@@ -117,7 +119,7 @@ class SlamStep {
   /// submap_carry it keeps the confirmed landmarks of the last scan's local region (r + d, at most
   /// kMaxCandidates), so consecutive maps share them; without, it begins empty. The stages start
   /// again as after reset(). @return kOk (the origin's covariance and the kept indices are valid).
-  [[nodiscard]] Status restart() {
+  [[nodiscard, gnu::cold]] Status restart() {
     std::int16_t keep[B::kMaxLandmarks];
     int kept = 0;
     if (cfg_.submap_carry) {

@@ -7,7 +7,8 @@
 //      a map whose alignment is not unique (a rival pose within the margin) or not supported (too
 //      few inliers) is kept apart, not guessed;
 //   2. tested: the alignment's pairs' constraints l' - m = 0 jointly, with the full covariance (the
-//      maps' own and the pose's); pairs are taken out, the largest d2 first, until the rest pass;
+//      maps' own and the pose's); a join whose pairs are not jointly compatible is refused (pruning
+//      them into agreement would accept a subset of any pairing);
 //   3. fused: the maps are independent (each robot's own scans), so the merged state is [M, L'] with
 //      a block-diagonal covariance, the constraints applied as one update and the paired rows of L'
 //      dropped (marginalised); its unpaired landmarks join as new ones.

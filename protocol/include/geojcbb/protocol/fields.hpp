@@ -64,26 +64,33 @@ constexpr const char* wire_name(WireType t) {
 /// Floats: always finite (+Inf too when plus_inf), then the optional bounds. kText: printable ASCII
 /// (0x20-0x7E), then zero padding only. kCount: a list's count, at most the receiver's capacity.
 /// The same value gives the check (in_range) and its text (render_range): one source.
+/// The small members first: 32 bytes, not 40 (every field's descriptor is in the device's flash).
 struct Range {
   enum class Kind : std::uint8_t { kAny, kInt, kOneOf, kFloat, kText, kCount };
   Kind kind = Kind::kAny;
-  std::int64_t lo = 0;
-  std::int64_t hi = 0;
-  float flo = 0.0f;
-  float fhi = 0.0f;
   bool has_lo = false;
   bool has_hi = false;
   bool lo_open = false;
   bool hi_open = false;
   bool plus_inf = false;
+  float flo = 0.0f;
+  float fhi = 0.0f;
+  std::int64_t lo = 0;
+  std::int64_t hi = 0;
 };
 
 namespace range {
 constexpr std::int64_t kNoMax = std::numeric_limits<std::int64_t>::max();
 constexpr Range any() { return Range{}; }
-constexpr Range at_least(std::int64_t lo) { return Range{Range::Kind::kInt, lo, kNoMax}; }
-constexpr Range between(std::int64_t lo, std::int64_t hi) { return Range{Range::Kind::kInt, lo, hi}; }
-constexpr Range one_of(std::int64_t a, std::int64_t b) { return Range{Range::Kind::kOneOf, a, b}; }
+constexpr Range integers(Range::Kind kind, std::int64_t lo, std::int64_t hi) {
+  Range r{kind};
+  r.lo = lo;
+  r.hi = hi;
+  return r;
+}
+constexpr Range at_least(std::int64_t lo) { return integers(Range::Kind::kInt, lo, kNoMax); }
+constexpr Range between(std::int64_t lo, std::int64_t hi) { return integers(Range::Kind::kInt, lo, hi); }
+constexpr Range one_of(std::int64_t a, std::int64_t b) { return integers(Range::Kind::kOneOf, a, b); }
 constexpr Range text() { return Range{Range::Kind::kText}; }
 constexpr Range count() { return Range{Range::Kind::kCount}; }
 /// f32: finite.
@@ -135,14 +142,32 @@ constexpr bool int_in_range(const Range& r, std::int64_t v) {
 
 /// One field of record R: a scalar (integer, enum, bool, float), std::array<float, N> (N f32 on the
 /// wire, each named by elem_names) or std::array<char, N> (text cN).
+/// A device build (GEOJCBB_DOC_TEXT=0) keeps no unit and note: they would be "" anyway, and every
+/// descriptor is in its flash.
 template <class R, class T>
 struct Field {
   const char* name;
   T R::*member;
   Range range;
-  const char* unit;               ///< for the docs ("" when none; names carry units too: x_m)
-  const char* note;               ///< for the docs (not part of the schema text)
   const char* const* elem_names;  ///< std::array<float, N>: the wire name of each element
+#if GEOJCBB_DOC_TEXT
+  const char* unit;  ///< for the docs ("" when none; names carry units too: x_m)
+  const char* note;  ///< for the docs (not part of the schema text)
+#endif
+  constexpr const char* unit_text() const {
+#if GEOJCBB_DOC_TEXT
+    return unit;
+#else
+    return "";
+#endif
+  }
+  constexpr const char* note_text() const {
+#if GEOJCBB_DOC_TEXT
+    return note;
+#else
+    return "";
+#endif
+  }
 };
 
 /// A counted list: count (u8) on the wire, then `count` items (struct Item with its own fields()).
@@ -165,18 +190,33 @@ struct IsFloatArray<std::array<float, N>> : std::true_type {};
 /// A text for people, or "" in a device build (the literal is then never emitted).
 constexpr const char* doc_text(const char* text) { return GEOJCBB_DOC_TEXT ? text : ""; }
 
+namespace detail {
+template <class R, class T>
+constexpr Field<R, T> make_field(const char* name, T R::*member, Range r, const char* unit, const char* note,
+                                 const char* const* elem_names) {
+#if GEOJCBB_DOC_TEXT
+  return Field<R, T>{name, member, r, elem_names, unit, note};
+#else
+  (void)unit;
+  (void)note;
+  return Field<R, T>{name, member, r, elem_names};
+#endif
+}
+}  // namespace detail
+using detail::make_field;
+
 template <class R, class T>
 constexpr Field<R, T> field(const char* name, T R::*member, Range r = range::any(), const char* unit = "",
                             const char* note = "") {
   static_assert(!detail::IsFloatArray<T>::value,
                 "an array of floats names its elements: field(name, member, range, unit, note, names)");
-  return Field<R, T>{name, member, r, doc_text(unit), doc_text(note), nullptr};
+  return make_field<R, T>(name, member, r, unit, note, nullptr);
 }
 /// An array of floats: N f32 on the wire, each with its own name (p00 ... p22).
 template <class R, std::size_t N>
 constexpr Field<R, std::array<float, N>> field(const char* name, std::array<float, N> R::*member, Range r,
                                                const char* unit, const char* note, const char* const (&elem_names)[N]) {
-  return Field<R, std::array<float, N>>{name, member, r, doc_text(unit), doc_text(note), elem_names};
+  return make_field<R, std::array<float, N>>(name, member, r, unit, note, elem_names);
 }
 template <class R, class C, class Item, std::size_t N>
 constexpr List<R, C, Item, N> list(const char* name, C R::*count, std::array<Item, N> R::*items, const char* items_name,
@@ -523,7 +563,7 @@ struct FieldInfo {
 namespace detail {
 template <class R, class T>
 constexpr FieldInfo info_of(const Field<R, T>& f, bool item, const char* items_name) {
-  return FieldInfo{f.name, WireOf<T>::kType, WireOf<T>::kCount, f.elem_names, f.range, f.unit, f.note,
+  return FieldInfo{f.name, WireOf<T>::kType, WireOf<T>::kCount, f.elem_names, f.range, f.unit_text(), f.note_text(),
                    item,   items_name};
 }
 template <class R, class C, class Item, std::size_t N>

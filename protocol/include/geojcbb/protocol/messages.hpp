@@ -614,10 +614,11 @@ struct Pose : Codec<Pose> {
 // stores it, read in place. The map's frame is the robot's pose when the map began, which is the
 // previous map's last robot pose (its state's first three and their covariance): the base pose.
 
-/// Landmarks per SUBMAP frame.
-constexpr std::size_t kSubmapLandmarksPerFrame = 32;
-/// Covariance entries per SUBMAP_COV frame.
-constexpr std::size_t kSubmapCovPerFrame = 128;
+/// Landmarks per SUBMAP frame, and covariance entries per SUBMAP_COV frame: each message's struct
+/// (the device builds one at a time on its stack) stays within the 512-byte frame limit of the
+/// firmware's stack check (docs/firmware.md), 284 and 400 bytes.
+constexpr std::size_t kSubmapLandmarksPerFrame = 16;
+constexpr std::size_t kSubmapCovPerFrame = 96;
 
 /// The frames of a hand-over of a map with `landmarks` landmarks.
 constexpr std::uint32_t submap_landmark_frames(std::uint32_t landmarks) {
@@ -677,7 +678,7 @@ struct Submap : Codec<Submap> {
         field("y_m", &Submap::y_m, range::finite(), "m"),
         field("theta_rad", &Submap::theta_rad, range::finite(), "rad"),
         list("count", &Submap::count, &Submap::items, "landmarks",
-             "≤ 32, and `len` = fixed + item size · count exactly"));
+             "≤ 16, and `len` = fixed + item size · count exactly"));
   }
   [[nodiscard]] Error rule() const {
     return chunk < chunks && static_cast<std::uint32_t>(first) + count <= landmarks ? Error::kOk : Error::kOutOfRange;
@@ -710,7 +711,7 @@ struct SubmapCov : Codec<SubmapCov> {
                            field("offset", &SubmapCov::offset, range::any(), "",
                                  "of the first entry: column c's row r (r ≤ c) is c (c + 1) / 2 + r"),
                            list("count", &SubmapCov::count, &SubmapCov::items, "entries",
-                                "≤ 128, and `len` = fixed + item size · count exactly"));
+                                "≤ 96, and `len` = fixed + item size · count exactly"));
   }
   [[nodiscard]] Error rule() const { return chunk < chunks ? Error::kOk : Error::kOutOfRange; }
 };
