@@ -163,6 +163,7 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
     P -= PHt * f.solve(PHt.transpose());
     P = (0.5 * (P + P.transpose())).eval();
     std::vector<int> keep;  // rows of X kept: the merged map's, then b's unpaired landmarks
+    keep.reserve(static_cast<std::size_t>(N) + static_cast<std::size_t>(n));
     for (int j = 0; j < N; ++j) keep.push_back(j);
     std::vector<bool> paired(static_cast<std::size_t>(n), false);
     for (const auto& q : pairs) paired[static_cast<std::size_t>(q.first)] = true;

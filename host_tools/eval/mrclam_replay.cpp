@@ -227,6 +227,7 @@ void print_merge(int dataset, const std::string& strategy, const std::vector<Mer
                  const MergeOptions& mo, nlohmann::json& js) {
   if (robots.empty()) return;
   std::vector<RobotMap> maps;
+  maps.reserve(robots.size());
   for (const MergedRobot& r : robots) maps.push_back(own_frame(*r.res, r.x0));
   const MergeResult m = merge_maps(maps, mo);
   int alone = 0;

@@ -174,7 +174,9 @@ Submap submap_from_wire(const LinkClient::WireSubmap& w, int index) {
   m.P.resize(d, d);
   for (int c = 0; c < d; ++c) {
     for (int r = 0; r <= c; ++r) {
-      m.P(r, c) = m.P(c, r) = w.cov[static_cast<std::size_t>(c * (c + 1) / 2 + r)];
+      const std::size_t k =
+          static_cast<std::size_t>(c) * static_cast<std::size_t>(c + 1) / 2 + static_cast<std::size_t>(r);
+      m.P(r, c) = m.P(c, r) = w.cov[k];
     }
   }
   return m;

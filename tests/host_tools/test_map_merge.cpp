@@ -35,6 +35,7 @@ TEST_CASE("merge: five robots' maps with unknown starts become one map, the star
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-5.0, 5.0);
   std::vector<Eigen::Vector2d> world;
+  world.reserve(15);
   for (int i = 0; i < 15; ++i) world.emplace_back(u(rng), u(rng));
   const std::vector<Pose2<double>> starts{{-4, -4, 0.3}, {3, -2, 2.0}, {0, 4, -1.2}, {-2, 1, 3.0}, {4, 4, -2.5}};
   std::vector<RobotMap> maps;

@@ -176,7 +176,8 @@ class Slam {
   /// the mount are kept.  O(kept^2), in place.
   /// @return as reset(); kInvalidInput for kept out of range or indices not increasing in range.
   ///         Nothing changes unless kOk.
-  [[nodiscard, gnu::cold]] Status restart(const Mat3<T>& P0, const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
+  [[nodiscard, gnu::noinline, gnu::cold]] Status restart(const Mat3<T>& P0,
+                                                         const std::int16_t (&keep)[B::kMaxLandmarks], int kept) {
     const Status s = check_pose_prior(Pose2<T>{T(0), T(0), T(0)}, P0);
     if (s != Status::kOk) return s;
     if (kept < 0 || kept > landmarks()) return Status::kInvalidInput;

@@ -559,7 +559,7 @@ class Node {
         w.y_m = static_cast<float>(l.y());
         w.confirmed = s.confirmed(j);
       }
-      send(m);
+      send_out_of_line(m);
     }
     return chunk;
   }
@@ -584,8 +584,13 @@ class Node {
           ++c;
         }
       }
-      send(m);
+      send_out_of_line(m);
     }
+  }
+  /// send(), in a frame of its own: the encoder's frame and the message's do not add up in one.
+  template <class M>
+  [[gnu::noinline, gnu::cold]] void send_out_of_line(const M& m) {
+    send(m);
   }
 
   void on_message(const proto::StatsRequest&) { send(stats()); }

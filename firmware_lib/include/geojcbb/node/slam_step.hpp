@@ -120,16 +120,15 @@ class SlamStep {
   /// kMaxCandidates), so consecutive maps share them; without, it begins empty. The stages start
   /// again as after reset(). @return kOk (the origin's covariance and the kept indices are valid).
   [[nodiscard, gnu::cold]] Status restart() {
-    std::int16_t keep[B::kMaxLandmarks];
+    std::int16_t keep[B::kMaxLandmarks];  // the only array on the stack: the frame stays within 512 B
     int kept = 0;
-    if (cfg_.submap_carry) {
-      bool mark[B::kMaxLandmarks] = {};
-      for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates
-        const int j = slam_.index_of(pred_.id[a]);
-        if (j >= 0 && slam_.confirmed(j)) mark[j] = true;
-      }
-      for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
-        if (mark[j]) keep[kept++] = static_cast<std::int16_t>(j);
+    for (int j = 0; cfg_.submap_carry && j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
+      if (!slam_.confirmed(j)) continue;
+      for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates: in the last scan's region
+        if (pred_.id[a] == slam_.id(j)) {
+          keep[kept++] = static_cast<std::int16_t>(j);
+          break;
+        }
       }
     }
     const Status st = slam_.restart(Mat3<T>::Identity() * kOriginVariance, keep, kept);
