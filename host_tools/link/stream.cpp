@@ -228,6 +228,12 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   std::uint32_t map_id = 0;
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
+  auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
+    for (const RunInput& in : ins) {
+      last_pose = moved(last_pose, in);
+      res.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose});
+    }
+  };
   auto hand_over = [&]() {
     const auto t0 = std::chrono::steady_clock::now();
     const LinkClient::WireSubmap w = link.receive_submap(map_id);
@@ -273,10 +279,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
     if (f.have_truth) scorer.pose(f.t_s, f.true_pose, x, P);
     if (o.record_trace) {
-      for (const RunInput& in : f.moves) {
-        last_pose = moved(last_pose, in);
-        res.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose});
-      }
+      trace_moves(f.moves);
       res.trace.push_back({f.t_s, x});
     }
     last_pose = x;
@@ -326,12 +329,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     if (flight.size() >= window) complete();
   }
   while (!flight.empty()) complete();
-  if (o.record_trace) {
-    for (const RunInput& m : moves) {
-      last_pose = moved(last_pose, m);
-      res.trace.push_back({m.increment ? m.t_s : m.t_s + m.dt_s, last_pose});
-    }
-  }
+  if (o.record_trace) trace_moves(moves);
   if (global) {  // the last local map, closed at the end of the inputs, joined too
     link.request_submap(map_id);
     hand_over();
