@@ -44,6 +44,7 @@ struct ReplayOptions {
   double noise_inflation = 1.5;
   double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
   bool known_map = false;
+  bool write_path = false;  ///< --write-path: path.csv, each strategy's pose after every input
   RunOptions run;
   GpsOptions gps;      ///< the screening (the antenna from the log's meta)
   RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
@@ -214,7 +215,7 @@ int run_replay(const ReplayOptions& o) {
   replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
   const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
   RunOptions base = o.run;
-  base.record_trace = !log.gps.empty();
+  base.record_trace = !log.gps.empty() || o.write_path;
   GpsOptions gps_opt = o.gps;
   if (log.meta.count("gps_x_m")) gps_opt.antenna_x_m = log.meta.at("gps_x_m");
   if (log.meta.count("gps_y_m")) gps_opt.antenna_y_m = log.meta.at("gps_y_m");
@@ -314,6 +315,37 @@ int run_replay(const ReplayOptions& o) {
       for (std::size_t i = 0; i < gps[k].t.size(); ++i)
         e << strategies[k].name() << ',' << gps[k].t[i] << ',' << gps[k].error_m[i] << '\n';
     if (!e) throw std::runtime_error("cannot write " + o.flags.out_dir + "/gps_error.csv");
+  }
+  if (o.write_path) {  // per strategy: the pose the run reported after each input
+    std::ofstream p(o.flags.out_dir + "/path.csv");
+    p << "strategy,t_s,x_m,y_m,theta_rad\n";
+    p.precision(10);
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      if (!agg[k].have_first) continue;
+      for (const TracePoint& q : agg[k].first.trace)
+        p << strategies[k].name() << ',' << q.t_s << ',' << q.pose.x << ',' << q.pose.y << ',' << q.pose.theta << '\n';
+    }
+    if (!p) throw std::runtime_error("cannot write " + o.flags.out_dir + "/path.csv");
+  }
+  bool any_join = false;
+  for (std::size_t k = 0; k < strategies.size(); ++k)
+    any_join = any_join || (agg[k].have_first && !agg[k].first.submaps.joins.empty());
+  if (any_join) {  // per strategy and local map: what its join did (docs/submaps.md)
+    std::ofstream j(o.flags.out_dir + "/joins.csv");
+    j << "strategy,map,t_s,landmarks,shared,offered,fused,declined,pruned,dropped,refused,joint_d2,global_landmarks,"
+         "base_x_m,base_y_m,base_theta_rad,base_sd_x_m,base_sd_y_m,base_sd_theta_rad\n";
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      if (!agg[k].have_first) continue;
+      const std::vector<JoinRecord>& js = agg[k].first.submaps.joins;
+      for (std::size_t m = 0; m < js.size(); ++m) {
+        const JoinRecord& r = js[m];
+        j << strategies[k].name() << ',' << m << ',' << r.t_s << ',' << r.landmarks << ',' << r.shared << ','
+          << r.offered << ',' << r.fused << ',' << r.declined << ',' << r.pruned << ',' << r.dropped << ',' << r.refused
+          << ',' << r.joint_d2 << ',' << r.global << ',' << r.base[0] << ',' << r.base[1] << ',' << r.base[2] << ','
+          << r.base_sd[0] << ',' << r.base_sd[1] << ',' << r.base_sd[2] << '\n';
+      }
+    }
+    if (!j) throw std::runtime_error("cannot write " + o.flags.out_dir + "/joins.csv");
   }
   if (labelled) {
     print_summary(rows, group_rows, stdout, "run");
@@ -456,6 +488,9 @@ Subcommand add_replay_command(CLI::App& app) {
       ->default_val(0.0)
       ->check(CLI::Range(0.0, 1000.0));
   rp->add_flag("--known-map", o->known_map, "localisation only: the landmark lines are the map (std 1 cm, fixed)");
+  rp->add_flag("--write-path", o->write_path,
+               "path.csv: each strategy's pose estimate after every prediction and scan (with --submaps, in the "
+               "global frame)");
   auto mrclam_rules = std::make_shared<bool>(false);
   rp->add_flag("--mrclam-rules", *mrclam_rules,
                "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "

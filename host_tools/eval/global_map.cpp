@@ -52,6 +52,23 @@ void in_frame(const Eigen::VectorXd& x, const std::vector<int>& g, Eigen::Vector
   }
 }
 
+/// in_frame's landmarks and their covariance H P H^T, from the rows of the pose and of those
+/// landmarks alone: O(s^2) for s landmarks (the seed's, every scan), not O(dim^2).
+void in_frame_cov(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& g, Eigen::VectorXd& c,
+                  Eigen::MatrixXd& C) {
+  std::vector<int> rows = {0, 1, 2}, at(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    at[k] = static_cast<int>(k);
+    rows.push_back(3 + 2 * g[k]);
+    rows.push_back(4 + 2 * g[k]);
+  }
+  const Eigen::VectorXd xs = x(rows);
+  Eigen::MatrixXd H;
+  in_frame(xs, at, c, H);
+  C = H * P(rows, rows) * H.transpose();
+  C = (0.5 * (C + C.transpose())).eval();
+}
+
 }  // namespace
 
 struct GlobalMap::Association {
@@ -498,38 +515,76 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
   P.bottomRightCorner(Du, Du) = 0.5 * (Puu + Puu.transpose());
 }
 
-Seed GlobalMap::seed(double radius_m, int max_count, const std::vector<FeatureId>& carried) const {
+Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_count,
+                     const std::vector<Held>& held) const {
   std::vector<bool> taken(static_cast<std::size_t>(landmarks()), false);
-  for (FeatureId id : carried) {
-    const int g = global_index(id);
+  std::vector<const Held*> unlinked;  // mapped anew in this map
+  for (const Held& h : held) {
+    const int g = global_index(h.id);
+    if (g >= 0) {
+      taken[static_cast<std::size_t>(g)] = true;
+    } else {
+      unlinked.push_back(&h);
+    }
+  }
+  for (FeatureId first : seed_.first_ids) {
+    const int g = index_of_first(first);
     if (g >= 0) taken[static_cast<std::size_t>(g)] = true;
   }
   std::vector<std::pair<double, int>> near;
   for (int k = 0; k < landmarks(); ++k) {
-    const double d = (landmark(k) - x_.head<2>()).norm();
+    const double d = (landmark(k) - center).norm();
     if (!taken[static_cast<std::size_t>(k)] && d < radius_m) near.emplace_back(d, k);
   }
   std::sort(near.begin(), near.end());
-  if (near.size() > static_cast<std::size_t>(std::max(max_count, 0)))
-    near.resize(static_cast<std::size_t>(std::max(max_count, 0)));
+  // Each near landmark in the base's frame, with its marginal covariance there.
+  const std::size_t m = near.size();
+  std::vector<Eigen::Vector2d> c(m);
+  std::vector<Eigen::Matrix2d> Pc(m);
+  for (std::size_t a = 0; a < m; ++a) {
+    Eigen::VectorXd ca;
+    Eigen::MatrixXd Ca;
+    in_frame_cov(x_, P_, {near[a].second}, ca, Ca);
+    c[a] = ca;
+    Pc[a] = Ca;
+  }
+  auto compatible = [&](const Eigen::Vector2d& e, const Eigen::Matrix2d& S) {
+    return e.dot(S.ldlt().solve(e)) < assoc_->gate;
+  };
   std::vector<int> g;
   Seed s;
-  for (const auto& p : near) {
-    g.push_back(p.second);
-    s.first_ids.push_back(first_id_[static_cast<std::size_t>(p.second)]);
+  for (std::size_t a = 0; a < m && static_cast<int>(g.size()) < max_count; ++a) {  // nearest first
+    bool skip = false;
+    for (const Held* h : unlinked) skip = skip || compatible(c[a] - h->x, Pc[a] + h->P);
+    // A seed is a loop closure the step does not check: only one that no other landmark near it
+    // could be taken for (their gates apart) is given; the rest are left to the join.
+    for (std::size_t b = 0; b < m && !skip; ++b) skip = b != a && compatible(c[a] - c[b], Pc[a] + Pc[b]);
+    for (const Held& h : held) skip = skip || (global_index(h.id) >= 0 && compatible(c[a] - h.x, Pc[a] + h.P));
+    if (skip) continue;
+    g.push_back(near[a].second);
+    s.first_ids.push_back(first_id_[static_cast<std::size_t>(near[a].second)]);
   }
-  Eigen::MatrixXd H;
-  in_frame(x_, g, s.x, H);
-  s.P = H * P_ * H.transpose();
-  s.P = (0.5 * (s.P + s.P.transpose())).eval();
+  in_frame_cov(x_, P_, g, s.x, s.P);
   return s;
 }
 
 void GlobalMap::seeded(const Seed& s, const std::vector<FeatureId>& local_ids) {
   if (local_ids.size() != s.first_ids.size()) throw std::runtime_error("seeded: one local id per seeded landmark");
-  seed_ = s;
-  seed_ids_ = local_ids;
+  const Eigen::Index a = seed_.x.size(), b = s.x.size();
+  Eigen::VectorXd x(a + b);
+  x << seed_.x, s.x;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(a + b, a + b);
+  P.topLeftCorner(a, a) = seed_.P;
+  P.bottomRightCorner(b, b) = s.P;
+  seed_.x = std::move(x);
+  seed_.P = std::move(P);
+  seed_.first_ids.insert(seed_.first_ids.end(), s.first_ids.begin(), s.first_ids.end());
+  seed_ids_.insert(seed_ids_.end(), local_ids.begin(), local_ids.end());
   for (std::size_t k = 0; k < local_ids.size(); ++k) global_of_[local_ids[k]] = s.first_ids[k];
+}
+
+Eigen::Vector2d GlobalMap::to_global(const Eigen::Vector2d& local) const {
+  return x_.head<2>() + rotation(x_(2)) * local;
 }
 
 }  // namespace geojcbb::host

@@ -39,6 +39,7 @@ struct SlamSession::State {
   std::vector<int> id_truth;  // landmark id -> its truth, kept when its local map is handed over
   double map_worst_s = 0;     // the current local map's slowest step
   double radius_m = 0;        // r + d
+  double last_t = 0;          // the last scan's time
   /// The pose and its covariance in the world: the local map's, through the global map's base.
   void world_pose(Pose2<double>& x, Eigen::Matrix3d& P) const {
     const ekf::Slam<double, EB>& slam = step.slam();
@@ -50,6 +51,9 @@ struct SlamSession::State {
   /// The local map handed over: joined into the global map, its landmarks gone from the scorer's
   /// map, the step restarted at the robot's pose.
   void hand_over();
+  /// The global map's landmarks near the robot that the local map does not hold, seeded into it
+  /// (RunOptions::submap_seed): a place mapped before is closed as a loop, not mapped again.
+  void seed_region();
 };
 
 void SlamSession::State::hand_over() {
@@ -59,19 +63,37 @@ void SlamSession::State::hand_over() {
   const Submap m = submap_of(slam, st.maps);
   id_truth.resize(sc.ids(), RunScorer::kUnknown);
   for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
-  record_join(st, m, global->join(m), id_truth, map_worst_s);
+  record_join(st, m, global->join(m), *global, last_t, id_truth, map_worst_s);
   map_worst_s = 0;
   check(step.restart(), "restart");
   for (FeatureId id : m.ids) {  // the landmarks not carried into the next map leave the scorer's map
     if (slam.index_of(id) < 0) sc.handed_over(id);
   }
-  if (!opt.submap_seed) return;
-  std::vector<FeatureId> carried(static_cast<std::size_t>(slam.landmarks()));
-  for (int j = 0; j < slam.landmarks(); ++j) carried[static_cast<std::size_t>(j)] = slam.id(j);
-  const Seed seed = global->seed(radius_m, DefaultBounds::kMaxCandidates - slam.landmarks(), carried);
+}
+
+void SlamSession::State::seed_region() {
+  RunScorer& sc = *scorer;
+  const ekf::Slam<double, EB>& slam = step.slam();
+  const int n = slam.landmarks();
+  std::vector<GlobalMap::Held> held(static_cast<std::size_t>(n));
+  int in_region = 0;
+  for (int j = 0; j < n; ++j) {
+    GlobalMap::Held& h = held[static_cast<std::size_t>(j)];
+    h.id = slam.id(j);
+    h.x = slam.landmark(j);
+    const int r = ekf::Layout::landmark(j);
+    h.P << slam.cov(r, r), slam.cov(r, r + 1), slam.cov(r + 1, r), slam.cov(r + 1, r + 1);
+    in_region += (h.x - Eigen::Vector2d(slam.pose().x, slam.pose().y)).norm() < radius_m;
+  }
+  // Room as on the default device: its candidates, and its map less a scan's new landmarks.
+  using DB = DefaultBounds;
+  const int room = std::min(DB::kMaxCandidates - in_region, DB::kMaxLandmarks - DB::kMaxObservations - n);
+  if (room <= 0) return;
+  const Eigen::Vector2d here = global->to_global(Eigen::Vector2d(slam.pose().x, slam.pose().y));
+  const Seed seed = global->seed(here, radius_m, room, held);
+  if (seed.first_ids.empty()) return;
   std::vector<FeatureId> ids;
   ids.reserve(seed.first_ids.size());
-  const int first = slam.landmarks();
   std::vector<Eigen::Matrix2d> cross;
   cross.reserve(seed.first_ids.size());
   for (std::size_t k = 0; k < seed.first_ids.size(); ++k) {
@@ -80,7 +102,7 @@ void SlamSession::State::hand_over() {
       cross.push_back(seed.P.block<2, 2>(2 * static_cast<Eigen::Index>(q), 2 * static_cast<Eigen::Index>(k)));
     FeatureId id = -1;
     const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
-    const Status sst = step.seed_landmark(seed.x.segment<2>(r), seed.P.block<2, 2>(r, r), cross.data(), first, id);
+    const Status sst = step.seed_landmark(seed.x.segment<2>(r), seed.P.block<2, 2>(r, r), cross.data(), n, id);
     check(sst, "seed_landmark");
     ids.push_back(id);
     sc.added(id, id_truth[static_cast<std::size_t>(seed.first_ids[k])]);
@@ -97,8 +119,8 @@ std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSett
   return std::make_unique<GlobalMap>(join);
 }
 
-void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const std::vector<int>& id_truth,
-                 double worst_step_s) {
+void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const GlobalMap& global, double t_s,
+                 const std::vector<int>& id_truth, double worst_step_s) {
   ++st.maps;
   st.offered += joined.offered;
   st.fused += joined.fused;
@@ -114,6 +136,28 @@ void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, con
   }
   st.landmarks.push_back(m.landmarks());
   st.worst_step_s.push_back(worst_step_s);
+  JoinRecord j;
+  static_cast<JoinCounts&>(j) = joined;
+  j.t_s = t_s;
+  j.global = global.landmarks();
+  for (int a = 0; a < 3; ++a) {
+    j.base[a] = global.state()(a);
+    j.base_sd[a] = std::sqrt(global.covariance()(a, a));
+  }
+  st.joins.push_back(j);
+}
+
+void take_global_map(RunResult& res, const GlobalMap& global, const std::vector<int>& id_truth) {
+  res.landmarks = global.landmarks();
+  res.map.clear();
+  res.spurious_in_map = 0;
+  for (int k = 0; k < res.landmarks; ++k) {
+    const auto id = static_cast<std::size_t>(global.first_id(k));
+    const int t = id < id_truth.size() ? id_truth[id] : RunScorer::kUnknown;
+    res.map.push_back({global.landmark(k).x(), global.landmark(k).y(), t});
+    res.spurious_in_map += t < 0;
+  }
+  res.map_cov = global.covariance().bottomRightCorner(2 * res.landmarks, 2 * res.landmarks);
 }
 
 // The ground-truth association (the step's association override): each observation of a mapped
@@ -256,6 +300,8 @@ void SlamSession::relocalise(const Eigen::Matrix3d& P) {
 
 void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2<double>* truth) {
   State& s = *st_;
+  s.last_t = t_s;
+  if (s.global && s.opt.submap_seed) s.seed_region();
   RunScorer& sc = *s.scorer;
   RunResult& res = sc.result();
   ++res.scans;
@@ -367,13 +413,7 @@ RunResult SlamSession::finish() {
   if (s.global) {  // the last local map joined too; the map is the global one
     s.hand_over();
     RunResult res = s.scorer->finish();
-    res.landmarks = s.global->landmarks();
-    for (int k = 0; k < res.landmarks; ++k) {
-      const int t = s.id_truth[static_cast<std::size_t>(s.global->first_id(k))];
-      res.map.push_back({s.global->landmark(k).x(), s.global->landmark(k).y(), t});
-      res.spurious_in_map += t < 0;
-    }
-    res.map_cov = s.global->covariance().bottomRightCorner(2 * res.landmarks, 2 * res.landmarks);
+    take_global_map(res, *s.global, s.id_truth);
     return res;
   }
   RunResult res = s.scorer->finish();

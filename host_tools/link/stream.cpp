@@ -47,6 +47,11 @@ proto::Config link_config(const SensorModel& sensor, const RunOptions& o) {
         "known_map (--known-map): CONFIG carries no landmarks, so a device would map instead of localise; run it "
         "in process");
   }
+  if (o.submap_seed) {
+    throw std::invalid_argument(
+        "submap_seed (--submap-seed): the link has no SUBMAP_SEED yet, so a device's local maps cannot be seeded; "
+        "run it in process (docs/submaps.md)");
+  }
   const StepSettings<double> s = step_settings(o, sensor);
   const StepSettings<double> defaults;
   std::string refused;
@@ -226,6 +231,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   std::unique_ptr<GlobalMap> global = maps ? make_global_map(o, ss) : nullptr;
   std::vector<int> id_truth;  // landmark id -> its truth
   std::uint32_t map_id = 0;
+  double last_t = 0;            // the last answered scan's time (a join's)
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
   auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
@@ -245,7 +251,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     }
     // The step's cost is not timed through a link (round trips are not steps): the device reports
     // its instruction counts in STATS (geojcbb_qemu --budget gives each local map's largest step).
-    record_join(res.submaps, m, global->join(m), id_truth, 0.0);
+    record_join(res.submaps, m, global->join(m), *global, last_t, id_truth, 0.0);
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);
@@ -284,6 +290,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     }
     last_pose = x;
     res.landmarks = r.pose.landmark_count;
+    last_t = f.t_s;
     if (r.pose.submap_frames > 0) {  // before the hook, which may ask for STATS
       if (!global) throw LinkError("the device handed over a local map, but this run has no submap rule");
       hand_over();
@@ -340,14 +347,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   }
   if (!global) return scorer.finish();
   RunResult out = scorer.finish();
-  out.landmarks = global->landmarks();
-  for (int k = 0; k < out.landmarks; ++k) {
-    const auto id = static_cast<std::size_t>(global->first_id(k));
-    const int t = id < id_truth.size() ? id_truth[id] : RunScorer::kUnknown;
-    out.map.push_back({global->landmark(k).x(), global->landmark(k).y(), t});
-    out.spurious_in_map += t < 0;
-  }
-  out.map_cov = global->covariance().bottomRightCorner(2 * out.landmarks, 2 * out.landmarks);
+  take_global_map(out, *global, id_truth);
   return out;
 }
 

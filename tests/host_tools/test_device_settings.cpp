@@ -152,6 +152,13 @@ TEST_CASE("device settings: every option away from its default runs on the devic
     const Outcome r = run_over_device(link, sc, o);
     CHECK(r.refused);
     CHECK(r.message.find("known_map") != std::string::npos);
+    RunOptions sd;  // the link has no SUBMAP_SEED: a seeded run is refused, not run unseeded
+    sd.max_steps = kSteps;
+    sd.submaps = true;
+    sd.submap_seed = true;
+    const Outcome rs = run_over_device(link, sc, sd);
+    CHECK(rs.refused);
+    CHECK(rs.message.find("submap_seed") != std::string::npos);
     RunOptions g;
     g.max_steps = kSteps;
     g.step.node_budget = DesktopBounds::kMaxJcbbNodes + 1;  // over the device's capacity: not clamped

@@ -92,6 +92,7 @@ TEST_CASE("global map: env1 in local maps of 30 landmarks, carried over and seed
   RunOptions single;
   single.step.strategy = Strategy::kPcjcbb;
   const RunResult one = run_slam(s, 3, single);
+  int shared[2] = {0, 0};  // landmarks joined by their ids (carried over, seeded), unseeded and seeded
   for (const bool seed : {false, true}) {
     RunOptions o;
     o.step.strategy = Strategy::kPcjcbb;
@@ -103,10 +104,59 @@ TEST_CASE("global map: env1 in local maps of 30 landmarks, carried over and seed
     CHECK(r.submaps.maps >= 5);
     CHECK(r.submaps.wrong == 0);
     CHECK(r.submaps.refused == 0);
-    CHECK(r.submaps.fused + r.submaps.declined + r.submaps.offered > 0);
+    REQUIRE(r.submaps.joins.size() == static_cast<std::size_t>(r.submaps.maps));
+    for (const JoinRecord& j : r.submaps.joins) shared[seed] += j.shared;
+    // Unseeded, the loop is closed by the joins' association; seeded, in the local maps.
+    if (!seed) CHECK(r.submaps.fused + r.submaps.declined + r.submaps.offered > 0);
     CHECK(r.score.f1() > 0.98);
     // The global map holds the landmarks the single map holds, not a copy per local map.
     CHECK(r.landmarks <= one.landmarks);
     CHECK(r.landmarks >= one.landmarks - 5);
   }
+  CHECK(shared[1] > shared[0]);  // the seeds were re-observed and joined by their ids
+}
+
+TEST_CASE("global map: a seed is the region's landmarks the local map does not hold, each once, none ambiguous") {
+  GlobalMap g(JoinOptions{});
+  // Map 0 (the world's frame) ends at (10, 0, 0), exactly: two landmarks near, one far, and two
+  // 0.1 m apart (either could be taken for the other: neither is given).
+  g.join(make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}, {40, 0}, {18, 5}, {18.1, 5}}, {0, 1, 2, 3, 4}, 0.04));
+  REQUIRE(g.landmarks() == 5);
+  const Eigen::Vector2d here(10, 0);
+  const Seed s = g.seed(here, 20, 10, {});
+  REQUIRE(s.first_ids.size() == 2);
+  CHECK(s.first_ids[0] == 0);  // nearest first
+  CHECK(s.first_ids[1] == 1);
+  CHECK((s.x.segment<2>(0) - Eigen::Vector2d(2, 1)).norm() < 1e-12);  // in the base's frame
+  CHECK((s.x.segment<2>(2) - Eigen::Vector2d(5, -2)).norm() < 1e-12);
+  CHECK(s.P(0, 0) == doctest::Approx(0.04));
+  CHECK(g.seed(here, 20, 1, {}).first_ids.size() == 1);  // at most max_count
+  // Held: one carried (its id is a global landmark's), one mapped anew where landmark 1 is.
+  GlobalMap::Held carried;
+  carried.id = 0;
+  carried.x = {2, 1};
+  GlobalMap::Held mapped;
+  mapped.id = 99;
+  mapped.x = {5.05, -2};
+  mapped.P = Eigen::Matrix2d::Identity() * 0.01;
+  CHECK(g.seed(here, 20, 10, {carried}).first_ids == std::vector<FeatureId>{1});
+  CHECK(g.seed(here, 20, 10, {carried, mapped}).first_ids.empty());
+  // Seeded at two scans: neither is given again, and each is the map's prior on its landmark: a map
+  // that learned nothing about them leaves the global map as it was.
+  const Seed a = g.seed(here, 20, 1, {});
+  g.seeded(a, {100});
+  const Seed b = g.seed(here, 20, 10, {});
+  REQUIRE(b.first_ids == std::vector<FeatureId>{1});
+  g.seeded(b, {101});
+  CHECK(g.seed(here, 20, 10, {}).first_ids.empty());
+  const Eigen::Vector2d l0 = g.landmark(0), l1 = g.landmark(1);
+  Submap m1 = make_map(1, {1, 0, 0}, {a.x.segment<2>(0), b.x.segment<2>(0)}, {100, 101}, 0.01);
+  m1.P.block<2, 2>(3, 3) = a.P;
+  m1.P.block<2, 2>(5, 5) = b.P;
+  const JoinResult j = g.join(m1);
+  CHECK(j.shared == 2);
+  CHECK(j.fused == 0);
+  CHECK(g.landmarks() == 5);
+  CHECK((g.landmark(0) - l0).norm() < 1e-9);
+  CHECK((g.landmark(1) - l1).norm() < 1e-9);
 }

@@ -14,6 +14,8 @@
 //      association declines as ambiguous (a runner-up within join_margin_d2) are kept apart
 //   4. fuse: the constraints as one update, the duplicates removed (marginalised); the new
 //      landmarks not paired stay; the base becomes the map's last pose.
+// While a map is built the host may seed it (seed(), seeded()) with the global landmarks near the
+// robot that it does not hold; their prior is divided out at the join like the carried ones'.
 // Dense double (Eigen), O(D^2 pairs) per join for D = 3 + 2 landmarks.
 #pragma once
 
@@ -26,6 +28,7 @@
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/presets.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb_host/run_score.hpp"
 
 namespace geojcbb::host {
 
@@ -73,17 +76,8 @@ struct JoinOptions {
   bool joint_check = true;
 };
 
-/// What one join did.
-struct JoinResult {
-  int landmarks = 0;     ///< of the local map
-  int shared = 0;        ///< carried over from the previous map (the same ids): joined by their ids
-  int offered = 0;       ///< of those, with a compatible global landmark (the association's observations)
-  int fused = 0;         ///< paired with a global landmark and fused
-  int declined = 0;      ///< ambiguous: kept apart
-  int pruned = 0;        ///< outside the jointly compatible subset (JoinOptions::joint_check): kept apart
-  int dropped = 0;       ///< tentative and not paired: left out
-  bool refused = false;  ///< the pairs were not jointly compatible: all kept apart
-  double joint_d2 = 0;   ///< of the fused pairs' constraints
+/// What one join did, and its pairs.
+struct JoinResult : JoinCounts {
   /// The fused pairs: (local id, the global landmark's first id).
   std::vector<std::pair<FeatureId, FeatureId>> pairs;
 };
@@ -105,12 +99,26 @@ class GlobalMap {
 
   /// Joins a closed local map. Throws std::runtime_error when the association fails (its status).
   JoinResult join(const Submap& m);
-  /// The seed of the next local map: the global landmarks within radius_m of the base, nearest
-  /// first, at most max_count, none of those the local ids `carried` stand for. Remembered as that
-  /// map's prior on them once seeded() names their local ids.
-  Seed seed(double radius_m, int max_count, const std::vector<FeatureId>& carried) const;
-  /// The local map took seed `s`, its landmark k under local_ids[k].
+  /// A landmark of the local map being built: its id and its estimate in the map's frame (the base's).
+  struct Held {
+    FeatureId id = -1;
+    Eigen::Vector2d x = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
+  };
+  /// A seed of the current local map: the global landmarks within radius_m of `center` (a point in
+  /// the global frame: where the robot is), nearest first, at most max_count. Left out: those a
+  /// landmark of `held` stands for (its id was carried, seeded or joined), those seeded into this
+  /// map before, and those individually compatible (chi2(confidence, 2)) with a held landmark that
+  /// stands for none (mapped anew in this map: the join associates the two, a seed would make a
+  /// duplicate). Their means and covariance are in the base's frame (the local map's origin) and
+  /// depend on the global state alone, which does not change while the map is built, so a map may
+  /// be seeded at any scan. Remembered as that map's prior on them once seeded() names their ids.
+  Seed seed(const Eigen::Vector2d& center, double radius_m, int max_count, const std::vector<Held>& held) const;
+  /// The local map took seed `s`, its landmark k under local_ids[k]. Seeds of one map add up; the
+  /// landmarks of two seeds are uncorrelated in the prior (as the device holds them).
   void seeded(const Seed& s, const std::vector<FeatureId>& local_ids);
+  /// The global position of the base's point `local`.
+  Eigen::Vector2d to_global(const Eigen::Vector2d& local) const;
   /// The global pose and covariance of a pose of the current local map (its origin is the base).
   void to_global(const Pose2<double>& local, const Eigen::Matrix3d& P_local, Pose2<double>& global,
                  Eigen::Matrix3d& P_global) const;
@@ -145,7 +153,7 @@ class GlobalMap {
   std::vector<FeatureId> first_id_;
   int maps_ = 0;
   std::unique_ptr<Submap> prev_;                        ///< the last map joined: the next one's prior
-  Seed seed_;                                           ///< the current map's seed
+  Seed seed_;                                           ///< the current map's seeds, stacked
   std::vector<FeatureId> seed_ids_;                     ///< its landmarks' local ids
   std::unordered_map<FeatureId, FeatureId> global_of_;  ///< local id -> its global landmark's first id
   std::unique_ptr<Association> assoc_;                  ///< the association's workspace (large: on the heap)

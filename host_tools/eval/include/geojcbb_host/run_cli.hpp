@@ -50,7 +50,8 @@ inline void add_run_options(CLI::App& app, RunOptions& run) {
                "--submap-scans; none given: at the default device's size less a scan) and joined into one global "
                "map (docs/submaps.md)");
   app.add_flag("--submap-seed", run.submap_seed,
-               "with --submaps: each new local map begins with the global map's landmarks of its region");
+               "with --submaps: before each scan, the global map's landmarks near the robot that the local map does "
+               "not hold are seeded into it (docs/submaps.md)");
   app.add_option("--join-preset", run.join_preset, "the association between local maps (docs/submaps.md)")
       ->capture_default_str();
   app.add_option("--join-margin", run.join.margin_d2,

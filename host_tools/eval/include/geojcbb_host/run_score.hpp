@@ -62,6 +62,27 @@ struct InnovationSums {
 };
 
 /// Sequential map joining's figures (RunOptions::submaps).
+/// What one join of a local map did (GlobalMap::join, docs/submaps.md).
+struct JoinCounts {
+  int landmarks = 0;     ///< of the local map
+  int shared = 0;        ///< carried over from the previous map or seeded (the same ids): joined by their ids
+  int offered = 0;       ///< of the others, with a compatible global landmark (the association's observations)
+  int fused = 0;         ///< paired with a global landmark and fused
+  int declined = 0;      ///< ambiguous: kept apart
+  int pruned = 0;        ///< outside the jointly compatible subset (JoinOptions::joint_check): kept apart
+  int dropped = 0;       ///< tentative and not paired: left out
+  bool refused = false;  ///< the pairs were not jointly compatible: all kept apart
+  double joint_d2 = 0;   ///< of the pairs' constraints, with the full covariance
+};
+
+/// One join as a run records it (SubmapStats::joins; replay writes them to joins.csv).
+struct JoinRecord : JoinCounts {
+  double t_s = 0;                 ///< the closing scan's time
+  int global = 0;                 ///< the global map's landmarks after the join
+  double base[3] = {0, 0, 0};     ///< the next map's origin (this map's last pose) in the global frame
+  double base_sd[3] = {0, 0, 0};  ///< its standard deviations [m, m, rad]
+};
+
 struct SubmapStats {
   int maps = 0;                      ///< local maps joined
   int offered = 0;                   ///< their landmarks with a compatible global one
@@ -71,6 +92,7 @@ struct SubmapStats {
   int wrong = 0;                     ///< fused pairs of two different true landmarks (labelled data)
   std::vector<int> landmarks;        ///< per local map: its landmarks when closed
   std::vector<double> worst_step_s;  ///< per local map: its slowest step (through a device: round trip)
+  std::vector<JoinRecord> joins;     ///< per local map: what its join did
   // Through a device (stream_run):
   int frames = 0;                  ///< SUBMAP and SUBMAP_COV frames received (one sending per map)
   int requests = 0;                ///< maps asked for again (frames lost)

@@ -48,8 +48,9 @@ struct RunOptions {
   /// StepSettings::submap_*) is joined into a GlobalMap with these options, and the step restarts.
   /// The pose and map reported are the global ones.
   bool submaps = false;
-  /// Each new local map is seeded with the global landmarks of its local region (r + d), at most the
-  /// default device's candidates less the landmarks it carried over (docs/submaps.md, "Seeding").
+  /// Before each scan, the local map is seeded with the global landmarks within r + d of the robot
+  /// that it does not hold (GlobalMap::seed), at most the default device's candidates less its own
+  /// landmarks there, and never past its capacity less a scan (docs/submaps.md, "Seed").
   bool submap_seed = false;
   JoinOptions join;
   std::string join_preset = "PCJCBB";  ///< join.preset's name (the command line's), read by step_settings
@@ -69,8 +70,13 @@ StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sen
 std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSettings<double>& step);
 /// A join's figures added to the run's: maps, offered, fused, declined, refused, the map's size and
 /// its worst step; a fused pair of two different known truths (id_truth[id]: >= 0) is a wrong join.
-void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const std::vector<int>& id_truth,
-                 double worst_step_s);
+/// The join's record (SubmapStats::joins) with the closing scan's time t_s and the global map's base
+/// after it.
+void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const GlobalMap& global, double t_s,
+                 const std::vector<int>& id_truth, double worst_step_s);
+/// The run's map is the global one: its landmarks with their truths (id_truth[first id], unknown when
+/// out of range), the spurious count, landmarks and map_cov.
+void take_global_map(RunResult& res, const GlobalMap& global, const std::vector<int>& id_truth);
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R
