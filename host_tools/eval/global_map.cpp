@@ -518,14 +518,9 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
 Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_count,
                      const std::vector<Held>& held) const {
   std::vector<bool> taken(static_cast<std::size_t>(landmarks()), false);
-  std::vector<const Held*> unlinked;  // mapped anew in this map
   for (const Held& h : held) {
     const int g = global_index(h.id);
-    if (g >= 0) {
-      taken[static_cast<std::size_t>(g)] = true;
-    } else {
-      unlinked.push_back(&h);
-    }
+    if (g >= 0) taken[static_cast<std::size_t>(g)] = true;
   }
   for (FeatureId first : seed_.first_ids) {
     const int g = index_of_first(first);
@@ -555,11 +550,11 @@ Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_cou
   Seed s;
   for (std::size_t a = 0; a < m && static_cast<int>(g.size()) < max_count; ++a) {  // nearest first
     bool skip = false;
-    for (const Held* h : unlinked) skip = skip || compatible(c[a] - h->x, Pc[a] + h->P);
-    // A seed is a loop closure the step does not check: only one that no other landmark near it
-    // could be taken for (their gates apart) is given; the rest are left to the join.
+    // Compatible with a landmark the map holds (made anew: the join pairs the two). A seed is a loop
+    // closure the step does not check: only one that no other landmark near it could be taken for
+    // (their gates apart), held or global, is given; the rest are left to the join.
+    for (const Held& h : held) skip = skip || compatible(c[a] - h.x, Pc[a] + h.P);
     for (std::size_t b = 0; b < m && !skip; ++b) skip = b != a && compatible(c[a] - c[b], Pc[a] + Pc[b]);
-    for (const Held& h : held) skip = skip || (global_index(h.id) >= 0 && compatible(c[a] - h.x, Pc[a] + h.P));
     if (skip) continue;
     g.push_back(near[a].second);
     s.first_ids.push_back(first_id_[static_cast<std::size_t>(near[a].second)]);

@@ -18,13 +18,12 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   submaps.declined += m.declined;
   submaps.refused += m.refused;
   submaps.wrong += m.wrong;
-  submaps.landmarks.insert(submaps.landmarks.end(), m.landmarks.begin(), m.landmarks.end());
-  submaps.worst_step_s.insert(submaps.worst_step_s.end(), m.worst_step_s.begin(), m.worst_step_s.end());
+  submaps.joins.insert(submaps.joins.end(), m.joins.begin(), m.joins.end());
   submaps.frames += m.frames;
   submaps.requests += m.requests;
   submaps.handover_s.insert(submaps.handover_s.end(), m.handover_s.begin(), m.handover_s.end());
-  for (std::size_t k = 1; k < m.worst_step_s.size() && m.worst_step_s[0] > 0; ++k) {
-    worst_step_ratio = std::max(worst_step_ratio, m.worst_step_s[k] / m.worst_step_s[0]);
+  for (std::size_t k = 1; k < m.joins.size() && m.joins[0].worst_step_s > 0; ++k) {
+    worst_step_ratio = std::max(worst_step_ratio, m.joins[k].worst_step_s / m.joins[0].worst_step_s);
   }
   score.add(r.score);
   group_score.add(r.group_score);
@@ -284,7 +283,7 @@ void print_submaps(const std::vector<Method>& strategies, const std::vector<RunA
     const SubmapStats& m = agg[k].submaps;
     if (m.maps == 0) continue;
     int most = 0;
-    for (int n : m.landmarks) most = std::max(most, n);
+    for (const JoinRecord& j : m.joins) most = std::max(most, j.landmarks);
     const double global = agg[k].runs > 0 ? double(agg[k].landmarks) / agg[k].runs : 0;  // per run
     char ratio[32] = "-";  // not timed (through a device: geojcbb_qemu --budget counts instructions)
     if (agg[k].worst_step_ratio > 0) std::snprintf(ratio, sizeof ratio, "%.2f", agg[k].worst_step_ratio);

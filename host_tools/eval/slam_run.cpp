@@ -63,7 +63,7 @@ void SlamSession::State::hand_over() {
   const Submap m = submap_of(slam, st.maps);
   id_truth.resize(sc.ids(), RunScorer::kUnknown);
   for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
-  record_join(st, m, global->join(m), *global, last_t, id_truth, map_worst_s);
+  record_join(st, global->join(m), *global, last_t, id_truth, map_worst_s);
   map_worst_s = 0;
   check(step.restart(), "restart");
   for (FeatureId id : m.ids) {  // the landmarks not carried into the next map leave the scorer's map
@@ -119,7 +119,7 @@ std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSett
   return std::make_unique<GlobalMap>(join);
 }
 
-void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const GlobalMap& global, double t_s,
+void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& global, double t_s,
                  const std::vector<int>& id_truth, double worst_step_s) {
   ++st.maps;
   st.offered += joined.offered;
@@ -134,11 +134,10 @@ void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, con
     const int a = truth(p.first), b = truth(p.second);
     st.wrong += a >= 0 && b >= 0 && a != b;
   }
-  st.landmarks.push_back(m.landmarks());
-  st.worst_step_s.push_back(worst_step_s);
   JoinRecord j;
   static_cast<JoinCounts&>(j) = joined;
   j.t_s = t_s;
+  j.worst_step_s = worst_step_s;
   j.global = global.landmarks();
   for (int a = 0; a < 3; ++a) {
     j.base[a] = global.state()(a);

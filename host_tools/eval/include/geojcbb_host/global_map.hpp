@@ -108,9 +108,9 @@ class GlobalMap {
   /// A seed of the current local map: the global landmarks within radius_m of `center` (a point in
   /// the global frame: where the robot is), nearest first, at most max_count. Left out: those a
   /// landmark of `held` stands for (its id was carried, seeded or joined), those seeded into this
-  /// map before, and those individually compatible (chi2(confidence, 2)) with a held landmark that
-  /// stands for none (mapped anew in this map: the join associates the two, a seed would make a
-  /// duplicate). Their means and covariance are in the base's frame (the local map's origin) and
+  /// map before, those individually compatible (chi2(confidence, 2)) with a held landmark (one
+  /// mapped anew in this map: the join associates the two, a seed would make a duplicate), and those
+  /// compatible with another global landmark near them (ambiguous: a seed is an unchecked closure). Their means and covariance are in the base's frame (the local map's origin) and
   /// depend on the global state alone, which does not change while the map is built, so a map may
   /// be seeded at any scan. Remembered as that map's prior on them once seeded() names their ids.
   Seed seed(const Eigen::Vector2d& center, double radius_m, int max_count, const std::vector<Held>& held) const;

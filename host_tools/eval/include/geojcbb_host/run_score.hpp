@@ -78,21 +78,20 @@ struct JoinCounts {
 /// One join as a run records it (SubmapStats::joins; replay writes them to joins.csv).
 struct JoinRecord : JoinCounts {
   double t_s = 0;                 ///< the closing scan's time
+  double worst_step_s = 0;        ///< the map's slowest step (0: not timed, as through a device)
   int global = 0;                 ///< the global map's landmarks after the join
   double base[3] = {0, 0, 0};     ///< the next map's origin (this map's last pose) in the global frame
   double base_sd[3] = {0, 0, 0};  ///< its standard deviations [m, m, rad]
 };
 
 struct SubmapStats {
-  int maps = 0;                      ///< local maps joined
-  int offered = 0;                   ///< their landmarks with a compatible global one
-  int fused = 0;                     ///< landmarks fused with a global one
-  int declined = 0;                  ///< ambiguous pairings kept apart
-  int refused = 0;                   ///< joins refused (their pairs not jointly compatible)
-  int wrong = 0;                     ///< fused pairs of two different true landmarks (labelled data)
-  std::vector<int> landmarks;        ///< per local map: its landmarks when closed
-  std::vector<double> worst_step_s;  ///< per local map: its slowest step (through a device: round trip)
-  std::vector<JoinRecord> joins;     ///< per local map: what its join did
+  int maps = 0;                   ///< local maps joined
+  int offered = 0;                ///< their landmarks with a compatible global one
+  int fused = 0;                  ///< landmarks fused with a global one
+  int declined = 0;               ///< ambiguous pairings kept apart
+  int refused = 0;                ///< joins refused (their pairs not jointly compatible)
+  int wrong = 0;                  ///< fused pairs of two different true landmarks (labelled data)
+  std::vector<JoinRecord> joins;  ///< per local map: what its join did
   // Through a device (stream_run):
   int frames = 0;                  ///< SUBMAP and SUBMAP_COV frames received (one sending per map)
   int requests = 0;                ///< maps asked for again (frames lost)

@@ -68,11 +68,10 @@ StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sen
 /// The global map of a run with submaps: opt.join with the preset named by opt.join_preset and the
 /// step's confidence. Throws std::invalid_argument for an unknown preset.
 std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSettings<double>& step);
-/// A join's figures added to the run's: maps, offered, fused, declined, refused, the map's size and
-/// its worst step; a fused pair of two different known truths (id_truth[id]: >= 0) is a wrong join.
-/// The join's record (SubmapStats::joins) with the closing scan's time t_s and the global map's base
-/// after it.
-void record_join(SubmapStats& st, const Submap& m, const JoinResult& joined, const GlobalMap& global, double t_s,
+/// A join's figures added to the run's (maps, offered, fused, declined, refused; a fused pair of two
+/// different known truths, id_truth[id] >= 0, is a wrong join) and its record (SubmapStats::joins):
+/// its counts, the closing scan's time t_s, the map's worst step and the global map's base after it.
+void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& global, double t_s,
                  const std::vector<int>& id_truth, double worst_step_s);
 /// The run's map is the global one: its landmarks with their truths (id_truth[first id], unknown when
 /// out of range), the spurious count, landmarks and map_cov.
