@@ -404,6 +404,7 @@ JoinResult GlobalMap::join(const Submap& m) {
   prev_ = std::make_unique<Submap>(m);
   seed_ = Seed{};
   seed_ids_.clear();
+  seed_refused_.clear();
   ++maps_;
   return res;
 }
@@ -516,16 +517,14 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
 }
 
 Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_count,
-                     const std::vector<Held>& held) const {
+                     const std::vector<FeatureId>& held) const {
   std::vector<bool> taken(static_cast<std::size_t>(landmarks()), false);
-  for (const Held& h : held) {
-    const int g = global_index(h.id);
+  auto take = [&](int g) {
     if (g >= 0) taken[static_cast<std::size_t>(g)] = true;
-  }
-  for (FeatureId first : seed_.first_ids) {
-    const int g = index_of_first(first);
-    if (g >= 0) taken[static_cast<std::size_t>(g)] = true;
-  }
+  };
+  for (FeatureId id : held) take(global_index(id));
+  for (FeatureId first : seed_.first_ids) take(index_of_first(first));
+  for (FeatureId first : seed_refused_) take(index_of_first(first));
   std::vector<std::pair<double, int>> near;
   for (int k = 0; k < landmarks(); ++k) {
     const double d = (landmark(k) - center).norm();
@@ -546,36 +545,52 @@ Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_cou
   auto compatible = [&](const Eigen::Vector2d& e, const Eigen::Matrix2d& S) {
     return e.dot(S.ldlt().solve(e)) < assoc_->gate;
   };
-  std::vector<int> g;
+  std::vector<std::size_t> given;
   Seed s;
-  for (std::size_t a = 0; a < m && static_cast<int>(g.size()) < max_count; ++a) {  // nearest first
+  for (std::size_t a = 0; a < m && static_cast<int>(given.size()) < max_count; ++a) {  // nearest first
+    // A seed is a loop closure the step does not check: only one that no other landmark near it
+    // could be taken for (their gates apart) is given; the rest are left to the join.
     bool skip = false;
-    // Compatible with a landmark the map holds (made anew: the join pairs the two). A seed is a loop
-    // closure the step does not check: only one that no other landmark near it could be taken for
-    // (their gates apart), held or global, is given; the rest are left to the join.
-    for (const Held& h : held) skip = skip || compatible(c[a] - h.x, Pc[a] + h.P);
     for (std::size_t b = 0; b < m && !skip; ++b) skip = b != a && compatible(c[a] - c[b], Pc[a] + Pc[b]);
     if (skip) continue;
-    g.push_back(near[a].second);
+    given.push_back(a);
     s.first_ids.push_back(first_id_[static_cast<std::size_t>(near[a].second)]);
   }
-  in_frame_cov(x_, P_, g, s.x, s.P);
+  const auto k = static_cast<Eigen::Index>(given.size());
+  s.x = Eigen::VectorXd::Zero(2 * k);
+  s.P = Eigen::MatrixXd::Zero(2 * k, 2 * k);
+  for (Eigen::Index q = 0; q < k; ++q) {
+    s.x.segment<2>(2 * q) = c[given[static_cast<std::size_t>(q)]];
+    s.P.block<2, 2>(2 * q, 2 * q) = Pc[given[static_cast<std::size_t>(q)]];
+  }
   return s;
 }
 
 void GlobalMap::seeded(const Seed& s, const std::vector<FeatureId>& local_ids) {
-  if (local_ids.size() != s.first_ids.size()) throw std::runtime_error("seeded: one local id per seeded landmark");
-  const Eigen::Index a = seed_.x.size(), b = s.x.size();
+  if (local_ids.size() != s.first_ids.size()) throw std::runtime_error("seeded: one answer per seed");
+  std::vector<Eigen::Index> took;
+  for (std::size_t k = 0; k < local_ids.size(); ++k) {
+    if (local_ids[k] >= 0) {
+      took.push_back(static_cast<Eigen::Index>(k));
+      seed_.first_ids.push_back(s.first_ids[k]);
+      seed_ids_.push_back(local_ids[k]);
+      global_of_[local_ids[k]] = s.first_ids[k];
+    } else if (local_ids[k] == kUnmatched) {
+      seed_refused_.push_back(s.first_ids[k]);
+    }
+  }
+  const Eigen::Index a = seed_.x.size(), b = 2 * static_cast<Eigen::Index>(took.size());
   Eigen::VectorXd x(a + b);
-  x << seed_.x, s.x;
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(a + b, a + b);
+  x.head(a) = seed_.x;
   P.topLeftCorner(a, a) = seed_.P;
-  P.bottomRightCorner(b, b) = s.P;
+  for (std::size_t q = 0; q < took.size(); ++q) {  // each seed's own block: they are uncorrelated
+    const Eigen::Index to = a + 2 * static_cast<Eigen::Index>(q), from = 2 * took[q];
+    x.segment<2>(to) = s.x.segment<2>(from);
+    P.block<2, 2>(to, to) = s.P.block<2, 2>(from, from);
+  }
   seed_.x = std::move(x);
   seed_.P = std::move(P);
-  seed_.first_ids.insert(seed_.first_ids.end(), s.first_ids.begin(), s.first_ids.end());
-  seed_ids_.insert(seed_ids_.end(), local_ids.begin(), local_ids.end());
-  for (std::size_t k = 0; k < local_ids.size(); ++k) global_of_[local_ids[k]] = s.first_ids[k];
 }
 
 Eigen::Vector2d GlobalMap::to_global(const Eigen::Vector2d& local) const {

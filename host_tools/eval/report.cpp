@@ -18,6 +18,7 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   submaps.declined += m.declined;
   submaps.refused += m.refused;
   submaps.wrong += m.wrong;
+  submaps.seeded += m.seeded;
   submaps.joins.insert(submaps.joins.end(), m.joins.begin(), m.joins.end());
   submaps.frames += m.frames;
   submaps.requests += m.requests;
@@ -277,8 +278,8 @@ void print_submaps(const std::vector<Method>& strategies, const std::vector<RunA
   std::fprintf(f,
                "\nLocal maps joined on the host (docs/submaps.md; summed over the runs)\n"
                "| strategy | local maps | landmarks per map (max) | offered | fused | declined | joins refused | "
-               "wrong joins | global map | slowest step / first map's |\n"
-               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+               "wrong joins | global map | slowest step / first map's | seeds taken |\n"
+               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (std::size_t k = 0; k < agg.size() && k < strategies.size(); ++k) {
     const SubmapStats& m = agg[k].submaps;
     if (m.maps == 0) continue;
@@ -287,8 +288,8 @@ void print_submaps(const std::vector<Method>& strategies, const std::vector<RunA
     const double global = agg[k].runs > 0 ? double(agg[k].landmarks) / agg[k].runs : 0;  // per run
     char ratio[32] = "-";  // not timed (through a device: geojcbb_qemu --budget counts instructions)
     if (agg[k].worst_step_ratio > 0) std::snprintf(ratio, sizeof ratio, "%.2f", agg[k].worst_step_ratio);
-    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %s |\n", strategies[k].name().c_str(), m.maps,
-                 most, m.offered, m.fused, m.declined, m.refused, m.wrong, global, ratio);
+    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %s | %d |\n", strategies[k].name().c_str(),
+                 m.maps, most, m.offered, m.fused, m.declined, m.refused, m.wrong, global, ratio, m.seeded);
   }
   for (std::size_t k = 0; k < agg.size() && k < strategies.size(); ++k) {
     const SubmapStats& m = agg[k].submaps;

@@ -74,38 +74,25 @@ void SlamSession::State::hand_over() {
 void SlamSession::State::seed_region() {
   RunScorer& sc = *scorer;
   const ekf::Slam<double, EB>& slam = step.slam();
-  const int n = slam.landmarks();
-  std::vector<GlobalMap::Held> held(static_cast<std::size_t>(n));
-  int in_region = 0;
-  for (int j = 0; j < n; ++j) {
-    GlobalMap::Held& h = held[static_cast<std::size_t>(j)];
-    h.id = slam.id(j);
-    h.x = slam.landmark(j);
-    const int r = ekf::Layout::landmark(j);
-    h.P << slam.cov(r, r), slam.cov(r, r + 1), slam.cov(r + 1, r), slam.cov(r + 1, r + 1);
-    in_region += (h.x - Eigen::Vector2d(slam.pose().x, slam.pose().y)).norm() < radius_m;
-  }
-  // Room as on the default device: its candidates, and its map less a scan's new landmarks.
-  using DB = DefaultBounds;
-  const int room = std::min(DB::kMaxCandidates - in_region, DB::kMaxLandmarks - DB::kMaxObservations - n);
-  if (room <= 0) return;
+  std::vector<FeatureId> held(static_cast<std::size_t>(slam.landmarks()));
+  for (int j = 0; j < slam.landmarks(); ++j) held[static_cast<std::size_t>(j)] = slam.id(j);
   const Eigen::Vector2d here = global->to_global(Eigen::Vector2d(slam.pose().x, slam.pose().y));
-  const Seed seed = global->seed(here, radius_m, room, held);
+  const Seed seed = global->seed(here, radius_m, node::kMaxSeeds, held);
   if (seed.first_ids.empty()) return;
-  std::vector<FeatureId> ids;
-  ids.reserve(seed.first_ids.size());
-  std::vector<Eigen::Matrix2d> cross;
-  cross.reserve(seed.first_ids.size());
-  for (std::size_t k = 0; k < seed.first_ids.size(); ++k) {
-    cross.clear();
-    for (std::size_t q = 0; q < k; ++q)
-      cross.push_back(seed.P.block<2, 2>(2 * static_cast<Eigen::Index>(q), 2 * static_cast<Eigen::Index>(k)));
-    FeatureId id = -1;
-    const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
-    const Status sst = step.seed_landmark(seed.x.segment<2>(r), seed.P.block<2, 2>(r, r), cross.data(), n, id);
-    check(sst, "seed_landmark");
-    ids.push_back(id);
-    sc.added(id, id_truth[static_cast<std::size_t>(seed.first_ids[k])]);
+  const int count = static_cast<int>(seed.first_ids.size());
+  node::MapSeed<double> in[node::kMaxSeeds];
+  node::SeedAnswer<double> out[node::kMaxSeeds];
+  for (int k = 0; k < count; ++k) {
+    in[k].l = seed.x.segment<2>(2 * k);
+    in[k].P = seed.P.block<2, 2>(2 * k, 2 * k);
+  }
+  check(step.seed(in, count, out), "seed");
+  std::vector<FeatureId> ids(static_cast<std::size_t>(count));
+  for (int k = 0; k < count; ++k) ids[static_cast<std::size_t>(k)] = out[k].id;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (ids[k] < 0) continue;
+    sc.added(ids[k], id_truth[static_cast<std::size_t>(seed.first_ids[k])]);
+    ++sc.result().submaps.seeded;
   }
   global->seeded(seed, ids);
 }

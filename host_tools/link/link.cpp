@@ -165,9 +165,18 @@ void LinkClient::relocalise(const proto::Relocalise& r) { send_stream(r, false, 
 void LinkClient::send_scan(const LinkObsBatch& b) { send_stream(b, true, b.batch_id); }
 
 LinkClient::ScanReply LinkClient::receive_scan(std::uint32_t batch_id) {
+  return receive_reply(batch_id, true, "the reply to batch " + std::to_string(batch_id));
+}
+
+void LinkClient::send_seed(const proto::SubmapSeed& s) { send_stream(s, true, s.batch_id); }
+
+LinkAssocResult LinkClient::receive_seed(std::uint32_t batch_id) {
+  return receive_reply(batch_id, false, "the answer to seed " + std::to_string(batch_id)).result;
+}
+
+LinkClient::ScanReply LinkClient::receive_reply(std::uint32_t batch_id, bool with_pose, const std::string& what) {
   ScanReply r;
   bool have_result = false;
-  const std::string what = "the reply to batch " + std::to_string(batch_id);
   wait(what.c_str(), [&](const Frame& f) {
     const bool is_result = f.type == static_cast<std::uint8_t>(proto::MsgType::kAssocResult);
     const bool is_pose = f.type == static_cast<std::uint8_t>(proto::MsgType::kPose);
@@ -188,14 +197,14 @@ LinkClient::ScanReply LinkClient::receive_scan(std::uint32_t batch_id) {
       duplicates_ += is_result ? 1 : 0;
       return Take::kSkip;
     }
-    if (id != batch_id || (is_pose && !have_result)) {
-      throw LinkError("the reply to batch " + std::to_string(batch_id) + " is lost (" +
-                          (is_result ? "ASSOC_RESULT" : "POSE") + " of batch " + std::to_string(id) + " came first)",
+    if (id != batch_id || (is_pose && (!have_result || !with_pose))) {
+      throw LinkError(what + " is lost (" + (is_result ? "ASSOC_RESULT" : "POSE") + " of batch " + std::to_string(id) +
+                          " came first)",
                       LinkError::Kind::kLost);
     }
     if (is_result) {
       have_result = true;
-      return Take::kSkip;  // the POSE follows
+      return with_pose ? Take::kSkip : Take::kTake;  // a scan's POSE follows; a seed has none
     }
     return Take::kTake;
   });

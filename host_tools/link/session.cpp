@@ -171,6 +171,20 @@ LinkClient::ScanReply LinkSession::receive_scan(std::uint32_t batch_id) {
   return guarded("the reply to a batch", true, [&] { return client_->receive_scan(batch_id); });
 }
 
+void LinkSession::send_seed(const proto::SubmapSeed& s) {
+  bool sent = false;
+  guarded("SUBMAP_SEED", true, [&] {
+    if (!sent) {
+      sent = true;
+      client_->send_seed(s);
+    }
+  });
+}
+
+LinkAssocResult LinkSession::receive_seed(std::uint32_t batch_id) {
+  return guarded("the answer to a seed", true, [&] { return client_->receive_seed(batch_id); });
+}
+
 // After a reconnection to the same device the map is still pending there: it is asked for again.
 LinkClient::WireSubmap LinkSession::receive_submap(std::uint32_t map_id) {
   bool first = true;

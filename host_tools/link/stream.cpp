@@ -47,11 +47,6 @@ proto::Config link_config(const SensorModel& sensor, const RunOptions& o) {
         "known_map (--known-map): CONFIG carries no landmarks, so a device would map instead of localise; run it "
         "in process");
   }
-  if (o.submap_seed) {
-    throw std::invalid_argument(
-        "submap_seed (--submap-seed): the link has no SUBMAP_SEED yet, so a device's local maps cannot be seeded; "
-        "run it in process (docs/submaps.md)");
-  }
   const StepSettings<double> s = step_settings(o, sensor);
   const StepSettings<double> defaults;
   std::string refused;
@@ -234,6 +229,14 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   double last_t = 0;            // the last answered scan's time (a join's)
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
+  // The seed (SUBMAP_SEED before each batch): where the robot was at the last reply (the world's
+  // frame), and the ids the current local map answered with (paired, new or seeded): the carried
+  // ones it has not re-observed yet are offered and refused as compatible, once.
+  if (o.submap_seed && (!global || window != 1)) {
+    throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
+  }
+  Eigen::Vector2d here(src.x0.x, src.x0.y);
+  std::vector<FeatureId> held;
   auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
     for (const RunInput& in : ins) {
       last_pose = moved(last_pose, in);
@@ -255,7 +258,36 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);
+    held.clear();
     res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  };
+
+  // The seed of the current local map before a batch: the global map's offer, the device's answer.
+  auto seed_map = [&]() {
+    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), held);
+    if (seed.first_ids.empty()) return;
+    proto::SubmapSeed m;
+    m.batch_id = next_batch++;
+    m.map_id = map_id;
+    m.count = static_cast<std::uint8_t>(seed.first_ids.size());
+    for (std::size_t k = 0; k < m.count; ++k) {
+      const auto q = 2 * static_cast<Eigen::Index>(k);
+      m.items[k] = {static_cast<float>(seed.x(q)), static_cast<float>(seed.x(q + 1)), static_cast<float>(seed.P(q, q)),
+                    static_cast<float>(seed.P(q, q + 1)), static_cast<float>(seed.P(q + 1, q + 1))};
+    }
+    link.send_seed(m);
+    const LinkAssocResult a = link.receive_seed(m.batch_id);
+    if (a.count != m.count) throw LinkError("the answer to seed " + std::to_string(m.batch_id) + " has another count");
+    std::vector<FeatureId> ids(m.count);
+    for (std::size_t k = 0; k < m.count; ++k) {
+      ids[k] = a.pairs[k].feature_id;
+      if (ids[k] < 0) continue;
+      held.push_back(ids[k]);
+      const auto first = static_cast<std::size_t>(seed.first_ids[k]);
+      scorer.added(ids[k], first < id_truth.size() ? id_truth[first] : RunScorer::kUnknown);
+    }
+    res.submaps.seeded += static_cast<int>(std::count_if(ids.begin(), ids.end(), [](FeatureId id) { return id >= 0; }));
+    global->seeded(seed, ids);
   };
 
   auto complete = [&]() {
@@ -275,6 +307,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     scorer.score(f.truth, paired);
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
+      if (q.feature_id >= 0) held.push_back(q.feature_id);
       if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
       not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
     }
@@ -283,6 +316,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
     Pose2<double> x{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
     if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
+    here = Eigen::Vector2d(x.x, x.y);
     if (f.have_truth) scorer.pose(f.t_s, f.true_pose, x, P);
     if (o.record_trace) {
       trace_moves(f.moves);
@@ -315,7 +349,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
       continue;
     }
     InFlight f;
-    f.batch = link_batch(in.observations, next_batch++, max_obs, f.truth);
+    f.batch = link_batch(in.observations, 0, max_obs, f.truth);  // numbered after its seed
     const int dropped = static_cast<int>(in.observations.size()) - static_cast<int>(f.batch.count);
     if (dropped > 0) {
       res.dropped_observations += dropped;
@@ -330,6 +364,8 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     moves.clear();
     f.have_truth = in.have_truth;
     f.true_pose = in.true_pose;
+    if (o.submap_seed) seed_map();
+    f.batch.batch_id = next_batch++;
     f.sent = std::chrono::steady_clock::now();
     link.send_scan(f.batch);
     flight.push_back(std::move(f));

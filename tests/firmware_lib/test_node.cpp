@@ -698,3 +698,73 @@ TEST_CASE("node: a hand-over survives a reconnection (HELLO) and is dropped by R
     CHECK(error_of(replies(h.out).at(0)) == proto::Error::kBusy);
   }
 }
+
+TEST_CASE(
+    "node: SUBMAP_SEED seeds the current map, answered by ASSOC_RESULT; a retransmission or another map's seed "
+    "changes nothing") {
+  Harness h;
+  open_submaps(h, 100);
+  for (int k = 0; k < 3; ++k) {
+    h.send(test_odometry());
+    h.send(test_batch(k));
+  }
+  const ekf::Slam<float, NodeB>& s = h.node->slam_step().slam();
+  const int n = s.landmarks();
+  REQUIRE(n >= 1);
+  const FeatureId next = s.next_id();
+  proto::SubmapSeed m;
+  m.batch_id = 1000;
+  m.map_id = 0;
+  m.count = 3;
+  m.items[0] = {1.0f, 8.0f, 0.04f, 0.01f, 0.09f};                           // a new place
+  m.items[1] = {s.landmark(0).x(), s.landmark(0).y(), 0.04f, 0.0f, 0.04f};  // where landmark 0 is
+  m.items[2] = {-3.0f, -6.0f, 0.25f, 0.0f, 0.25f};                          // another new place
+  h.out.clear();
+  const std::vector<std::uint8_t> frame = h.frame(m, h.seq++);
+  h.send_bytes(frame);
+  std::vector<Reply> r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  const auto a = decoded<proto::AssocResult>(r[0]);
+  const std::vector<std::uint8_t> answer = r[0].payload;
+  CHECK(a.batch_id == 1000);
+  REQUIRE(a.count == 3);
+  CHECK(a.pairs[0].outcome == proto::PairingOutcome::kNewLandmark);
+  CHECK(a.pairs[0].feature_id == next);
+  CHECK(a.pairs[1].outcome == proto::PairingOutcome::kUnmatched);  // the map holds it: the join pairs them
+  CHECK(a.pairs[1].feature_id == proto::kFeatureUnmatched);
+  CHECK(a.pairs[1].d2 < 1e-3f);
+  CHECK(a.pairs[2].outcome == proto::PairingOutcome::kNewLandmark);
+  CHECK(a.pairs[2].feature_id == next + 1);
+  REQUIRE(s.landmarks() == n + 2);
+  // Each seed as given: confirmed, its covariance its own, uncorrelated with the pose and the map.
+  const int j = s.index_of(next);
+  REQUIRE(j >= 0);
+  CHECK(s.confirmed(j));
+  CHECK(s.landmark(j).x() == 1.0f);
+  CHECK(s.landmark(j).y() == 8.0f);
+  const int row = ekf::Layout::landmark(j);
+  CHECK(s.cov(row, row) == 0.04f);
+  CHECK(s.cov(row, row + 1) == 0.01f);
+  CHECK(s.cov(row + 1, row + 1) == 0.09f);
+  for (int c = 0; c < row; ++c) CHECK(s.cov(c, row) == 0.0f);
+  // Sent again (its answer lost): answered again, not seeded twice.
+  h.out.clear();
+  h.send_bytes(frame);
+  r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].payload == answer);
+  CHECK(s.landmarks() == n + 2);
+  // Another map's seed: ERROR out of range, nothing seeded.
+  m.batch_id = 1001;
+  m.map_id = 1;
+  h.out.clear();
+  h.send(m);
+  r = replies(h.out);
+  REQUIRE(r.size() == 1);
+  CHECK(error_of(r[0]) == proto::Error::kOutOfRange);
+  CHECK(s.landmarks() == n + 2);
+  // The scans go on with the seeds in the map.
+  h.send(test_odometry());
+  h.send(test_batch(3));
+  CHECK(h.node->stats().scans == 4);
+}

@@ -122,7 +122,8 @@ struct ReplyChecker {
     } else if constexpr (M::kType == MsgType::kHello || M::kType == MsgType::kConfig || M::kType == MsgType::kReset ||
                          M::kType == MsgType::kOdometry || M::kType == MsgType::kObsBatch ||
                          M::kType == MsgType::kPing || M::kType == MsgType::kStatsRequest ||
-                         M::kType == MsgType::kShutdown || M::kType == MsgType::kSubmapAck) {
+                         M::kType == MsgType::kShutdown || M::kType == MsgType::kSubmapAck ||
+                         M::kType == MsgType::kSubmapSeed) {
       require(false);  // host-to-device types are never sent by the device
     }
   }
@@ -474,6 +475,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           a.map_id = in.u8() % 4;
           a.send = (in.u8() & 1) != 0;
           s.send(a);
+          break;
+        }
+        if (op & 0x20) {  // SUBMAP_SEED: a few landmarks, some bad (not definite)
+          proto::SubmapSeed m;
+          m.batch_id = ++batch_id;
+          m.map_id = in.u8() % 4;
+          m.count = static_cast<std::uint8_t>(in.u8() % (proto::kSeedsPerFrame + 1));
+          for (std::size_t k = 0; k < m.count; ++k) {
+            proto::SeedWire& w = m.items[k];
+            w.x_m = static_cast<float>(static_cast<std::int8_t>(in.u8()));
+            w.y_m = static_cast<float>(static_cast<std::int8_t>(in.u8()));
+            w.p00 = 0.01f * static_cast<float>(in.u8());
+            w.p01 = 0.001f * static_cast<float>(static_cast<std::int8_t>(in.u8()));
+            w.p11 = 0.01f * static_cast<float>(in.u8());
+          }
+          if (m.validate() == proto::Error::kOk) s.send(m);
           break;
         }
         std::array<std::uint8_t, 64> p{};

@@ -60,26 +60,18 @@ void try_decode(const std::uint8_t* p, std::size_t n, std::uint8_t type, std::ui
   require(decode_message(f, back) == Error::kOk);
 }
 
+template <class... M>
+void try_each(MessageList<M...>, const std::uint8_t* p, std::size_t n, std::uint8_t type, std::uint16_t seq,
+              std::uint8_t fl) {
+  (try_decode<M>(p, n, type, seq, fl), ...);
+}
+
+/// Every message of the schema, and the lists at other capacities.
 void try_all(const std::uint8_t* p, std::size_t n, std::uint8_t type, std::uint16_t seq, std::uint8_t fl) {
-  try_decode<Hello>(p, n, type, seq, fl);
-  try_decode<Capabilities>(p, n, type, seq, fl);
-  try_decode<Config>(p, n, type, seq, fl);
-  try_decode<Ack>(p, n, type, seq, fl);
-  try_decode<Nack>(p, n, type, seq, fl);
-  try_decode<Ping>(p, n, type, seq, fl);
-  try_decode<Pong>(p, n, type, seq, fl);
-  try_decode<Reset>(p, n, type, seq, fl);
-  try_decode<Shutdown>(p, n, type, seq, fl);
-  try_decode<Odometry>(p, n, type, seq, fl);
-  try_decode<ObsBatch>(p, n, type, seq, fl);
+  try_each(AllMessages<>{}, p, n, type, seq, fl);
   try_decode<ObsBatchT<1>>(p, n, type, seq, fl);
   try_decode<ObsBatchT<50>>(p, n, type, seq, fl);
-  try_decode<AssocResult>(p, n, type, seq, fl);
   try_decode<AssocResultT<113>>(p, n, type, seq, fl);
-  try_decode<Pose>(p, n, type, seq, fl);
-  try_decode<StatsRequest>(p, n, type, seq, fl);
-  try_decode<Stats>(p, n, type, seq, fl);
-  try_decode<ErrorReport>(p, n, type, seq, fl);
 }
 
 std::uint64_t total(const DecoderCounters& c) {

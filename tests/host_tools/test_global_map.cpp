@@ -131,16 +131,19 @@ TEST_CASE("global map: a seed is the region's landmarks the local map does not h
   CHECK((s.x.segment<2>(2) - Eigen::Vector2d(5, -2)).norm() < 1e-12);
   CHECK(s.P(0, 0) == doctest::Approx(0.04));
   CHECK(g.seed(here, 20, 1, {}).first_ids.size() == 1);  // at most max_count
-  // Held: one carried (its id is a global landmark's), one mapped anew where landmark 1 is.
-  GlobalMap::Held carried;
-  carried.id = 0;
-  carried.x = {2, 1};
-  GlobalMap::Held mapped;
-  mapped.id = 99;
-  mapped.x = {5.05, -2};
-  mapped.P = Eigen::Matrix2d::Identity() * 0.01;
-  CHECK(g.seed(here, 20, 10, {carried}).first_ids == std::vector<FeatureId>{1});
-  CHECK(g.seed(here, 20, 10, {carried, mapped}).first_ids.empty());
+  CHECK(s.P.block<2, 2>(0, 2).isZero());                 // uncorrelated, as SUBMAP_SEED carries them
+  // Held: the local map holds landmark 0 (carried: its id is the global landmark's).
+  CHECK(g.seed(here, 20, 10, {0}).first_ids == std::vector<FeatureId>{1});
+  // The map refused landmark 1 (it holds one compatible with it): not offered again to this map;
+  // one it had no room for is offered again.
+  {
+    GlobalMap h(JoinOptions{});
+    h.join(make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}}, {0, 1}, 0.04));
+    const Seed t = h.seed(here, 20, 10, {});
+    REQUIRE(t.first_ids.size() == 2);
+    h.seeded(t, {kNewFeature, kUnmatched});
+    CHECK(h.seed(here, 20, 10, {}).first_ids == std::vector<FeatureId>{0});
+  }
   // Seeded at two scans: neither is given again, and each is the map's prior on its landmark: a map
   // that learned nothing about them leaves the global map as it was.
   const Seed a = g.seed(here, 20, 1, {});

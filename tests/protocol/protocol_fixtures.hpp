@@ -189,6 +189,60 @@ inline Pose sample<Pose>() {
   return p;
 }
 template <>
+inline SubmapAck sample<SubmapAck>() {
+  SubmapAck a{};
+  a.map_id = 7;
+  a.send = true;
+  return a;
+}
+template <>
+inline Submap sample<Submap>() {  // chunk 1 of a 20-landmark map: landmarks 16..19
+  Submap m{};
+  m.map_id = 3;
+  m.chunk = 1;
+  m.chunks = static_cast<std::uint16_t>(submap_frames(20));
+  m.landmarks = 20;
+  m.first = 16;
+  m.x_m = 12.5f;
+  m.y_m = -3.25f;
+  m.theta_rad = 0.75f;
+  m.count = 4;
+  for (std::uint8_t k = 0; k < m.count; ++k) m.items[k] = {40 + k, 1.0f + k, -2.0f * k, k % 2 == 0};
+  return m;
+}
+template <>
+inline SubmapCov sample<SubmapCov>() {
+  SubmapCov c{};
+  c.map_id = 3;
+  c.chunk = 2;
+  c.chunks = 5;
+  c.offset = 96;
+  c.count = 3;
+  c.items[0].v = 0.5f;
+  c.items[1].v = -0.125f;
+  c.items[2].v = 2.0f;
+  return c;
+}
+inline SubmapSeed submap_seed(int count, std::uint32_t id = 78) {
+  SubmapSeed s{};
+  s.batch_id = id;
+  s.map_id = 2;
+  s.count = static_cast<std::uint8_t>(count);
+  for (int k = 0; k < count; ++k) {
+    SeedWire& w = s.items[static_cast<std::size_t>(k)];
+    w.x_m = 4.0f + 1.5f * static_cast<float>(k);
+    w.y_m = -1.0f + 0.5f * static_cast<float>(k);
+    w.p00 = 0.25f + 0.01f * static_cast<float>(k);
+    w.p01 = 0.02f;
+    w.p11 = 0.5f;
+  }
+  return s;
+}
+template <>
+inline SubmapSeed sample<SubmapSeed>() {
+  return submap_seed(3);
+}
+template <>
 inline StatsRequest sample<StatsRequest>() {
   return StatsRequest{};
 }

@@ -20,8 +20,8 @@
 using namespace proto_test;
 
 TEST_CASE_TEMPLATE("protocol: round trip of every message, whole and one byte at a time", M, Hello, Capabilities,
-                   Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, Odometry, OdomDelta, ObsBatch,
-                   AssocResult, Pose, StatsRequest, Stats, ErrorReport) {
+                   Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise, SubmapAck, Odometry, OdomDelta, ObsBatch,
+                   SubmapSeed, AssocResult, Pose, Submap, SubmapCov, StatsRequest, Stats, ErrorReport) {
   const M m = sample<M>();
   const Bytes payload = payload_of(m);
   CHECK(payload.size() == m.payload_size());
@@ -87,7 +87,7 @@ TEST_CASE_TEMPLATE("protocol: round trip of every message, whole and one byte at
     const SchemaLayout s = schema_layout(static_cast<std::uint8_t>(M::kType));
     CHECK(s.found);
     std::size_t expected = s.fixed_bytes;
-    if constexpr (std::is_same_v<M, ObsBatch> || std::is_same_v<M, AssocResult>) expected += m.count * s.item_bytes;
+    if constexpr (M::kItemSize > 0) expected += m.count * s.item_bytes;  // a list's items
     CHECK(payload.size() == expected);
   }
 }
@@ -242,6 +242,9 @@ TEST_CASE("protocol: NaN and Inf in every float field are rejected") {
   check_float_fields(obs_batch(3), 3);
   check_float_fields(sample<AssocResult>(), 4);
   check_float_fields(sample<Pose>());
+  check_float_fields(sample<SubmapSeed>(), 3);
+  check_float_fields(sample<Submap>(), 4);
+  check_float_fields(sample<SubmapCov>(), 3);
   // Encoder side: a non-finite field is refused before anything is written.
   Odometry o = sample<Odometry>();
   o.dt_s = std::numeric_limits<float>::quiet_NaN();
@@ -375,6 +378,22 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     o.v_mps = -5.0f;  // reversing is fine
     o.dt_s = 0.0f;
     rejects(o, Error::kOk);
+  }
+  SUBCASE("SUBMAP_SEED") {
+    SubmapSeed s = submap_seed(static_cast<int>(kSeedsPerFrame));
+    rejects(s, Error::kOk);
+    s.items[7].p01 = 0.6f;  // p00 p11 < p01^2
+    rejects(s, Error::kNotPositiveDefinite);
+    s = submap_seed(2);
+    s.items[1].p11 = 0.0f;
+    rejects(s, Error::kNotPositiveDefinite);
+    s.items[1].p11 = 0.5f;
+    s.items[1].x_m = std::numeric_limits<float>::infinity();
+    rejects(s, Error::kNonFinite);
+    s = submap_seed(static_cast<int>(kSeedsPerFrame));
+    s.count = static_cast<std::uint8_t>(kSeedsPerFrame + 1);
+    rejects(s, Error::kCapacityExceeded);
+    CHECK(payload_of(submap_seed(static_cast<int>(kSeedsPerFrame))).size() == 9 + 8 * 20);
   }
   SUBCASE("OBS_BATCH") {
     ObsBatch b = obs_batch(3);

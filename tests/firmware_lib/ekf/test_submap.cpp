@@ -106,28 +106,27 @@ TEST_CASE("restart: kept landmarks in the robot's frame with J P J^T, the pose a
   CHECK(id == next);
 }
 
-TEST_CASE("seed_landmark: a confirmed landmark correlated with the earlier seeds only; bad input refused") {
+TEST_CASE("seed_landmark: a confirmed landmark uncorrelated with the map; bad input refused, nothing changed") {
   auto slam = std::make_unique<Slam<double, SB>>();
   REQUIRE(slam->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-6) == Status::kOk);
   FeatureId a = -1, b = -1;
-  const Mat2<double> Pa = Mat2<double>::Identity() * 0.04;
-  REQUIRE(slam->seed_landmark(Vec2<double>(3, 1), Pa, nullptr, 0, a) == Status::kOk);
-  Mat2<double> cross;
-  cross << 0.01, 0.002, -0.001, 0.015;
-  CHECK(slam->seed_landmark(Vec2<double>(5, 1), Pa, nullptr, 0, b) == Status::kInvalidInput);  // no cross given
+  Mat2<double> Pa;
+  Pa << 0.04, 0.01, 0.01, 0.09;
+  REQUIRE(slam->seed_landmark(Vec2<double>(3, 1), Pa, a) == Status::kOk);
   Mat2<double> bad = Pa;
   bad(1, 1) = -1;
-  CHECK(slam->seed_landmark(Vec2<double>(5, 1), bad, &cross, 0, b) == Status::kNotPositiveDefinite);
+  CHECK(slam->seed_landmark(Vec2<double>(5, 1), bad, b) == Status::kNotPositiveDefinite);
+  CHECK(slam->seed_landmark(Vec2<double>(5, std::nan("")), Pa, b) == Status::kNonFinite);
   CHECK(slam->landmarks() == 1);
-  REQUIRE(slam->seed_landmark(Vec2<double>(5, 1), Pa, &cross, 0, b) == Status::kOk);
+  REQUIRE(slam->seed_landmark(Vec2<double>(5, 1), Pa, b) == Status::kOk);
   CHECK(slam->confirmed(0));
   CHECK(slam->confirmed(1));
   CHECK(b == a + 1);
   const int la = Layout::landmark(0), lb = Layout::landmark(1);
-  CHECK(slam->cov(la, lb) == cross(0, 0));
-  CHECK(slam->cov(la, lb + 1) == cross(0, 1));
-  CHECK(slam->cov(la + 1, lb) == cross(1, 0));
-  CHECK(slam->cov(lb, 0) == 0);  // uncorrelated with the pose
+  CHECK(slam->cov(lb, lb + 1) == 0.01);
+  CHECK(slam->cov(lb + 1, lb + 1) == 0.09);
+  CHECK(slam->cov(la, lb) == 0);  // uncorrelated with the other seed
+  CHECK(slam->cov(lb, 0) == 0);   // and with the pose
 }
 
 TEST_CASE("closing rule: a map is due after its landmarks (once it has added one), its distance or its scans") {

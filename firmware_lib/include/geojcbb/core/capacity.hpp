@@ -55,6 +55,15 @@ inline constexpr bool kImageHypotheses = false;
 #else
 inline constexpr bool kImageHypotheses = true;
 #endif
+/// And the duplicate merge (StepSettings::duplicate_merge_d2: off by default, and measured to merge
+/// no true duplicate that the existence rule leaves, only false ones: docs/results/existence.md): the
+/// default image leaves it out (GEOJCBB_WITHOUT_DUPLICATE_MERGE) to make room for the local map's
+/// seed (SUBMAP_SEED).
+#ifdef GEOJCBB_WITHOUT_DUPLICATE_MERGE
+inline constexpr bool kImageDuplicateMerge = false;
+#else
+inline constexpr bool kImageDuplicateMerge = true;
+#endif
 
 /// The optional stages a configuration compiles in. The hypothesis window and clusters first
 /// (StepSettings::hypothesis_rivals, cluster_first: about 7 KB of Cortex-M4 code) and the local
@@ -64,13 +73,15 @@ inline constexpr bool kImageHypotheses = true;
 /// device and on the host.
 template <class B>
 struct OptionalStages {
-  static constexpr bool kHypotheses = kImageHypotheses;  ///< the hypothesis window and clusters first
-  static constexpr bool kHandOver = true;                ///< local maps closed and handed over
+  static constexpr bool kHypotheses = kImageHypotheses;          ///< the hypothesis window and clusters first
+  static constexpr bool kHandOver = true;                        ///< local maps closed, handed over, seeded
+  static constexpr bool kDuplicateMerge = kImageDuplicateMerge;  ///< duplicate_merge_d2
 };
 template <>
 struct OptionalStages<SmallControllerBounds> {
   static constexpr bool kHypotheses = false;
   static constexpr bool kHandOver = false;
+  static constexpr bool kDuplicateMerge = kImageDuplicateMerge;
 };
 
 }  // namespace geojcbb

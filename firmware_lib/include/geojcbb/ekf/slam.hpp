@@ -743,29 +743,18 @@ class Slam {
     return Status::kOk;
   }
 
-  /// A landmark of the global map given to a new local map (docs/submaps.md, seeding): at l in this
-  /// map's frame with covariance Pll; cross[k] (2x2) its covariance with landmark first + k for
-  /// k < landmarks() - first (the ones seeded before it), uncorrelated with the pose and the others.
-  /// It starts confirmed. The joint covariance is the caller's to make positive definite (a
-  /// marginal of its own); the new block is checked, as augment() does.
+  /// A landmark of the global map given to this local map (docs/submaps.md, "Seed"; node::seed_map):
+  /// at l in this map's frame with covariance Pll, uncorrelated with the pose and with every other
+  /// landmark (the seeds' prior is block-diagonal, as SUBMAP_SEED carries it). It starts confirmed.
   /// @param[out] id  the new landmark's id
-  /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll; kInvalidInput for first out of range;
+  /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll (checked as augment() does);
   ///         kCapacityExceeded. No state changes unless kOk.  O(n)
-  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, const Mat2<T>* cross, int first,
-                                     FeatureId& id) {
-    if (first < 0 || first > landmarks() || (first < landmarks() && cross == nullptr)) return Status::kInvalidInput;
+  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
     if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    for (int k = first; k < landmarks(); ++k) {  // <= kMaxLandmarks
-      if (!cross[k - first].allFinite()) return Status::kNonFinite;
-    }
     const Mat2<T> Pll_sym = symmetric_part(Pll);
     if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
     if (book_.full()) return Status::kCapacityExceeded;
-    const int n = dim();
-    P_.append_uncorrelated(n, Pll_sym);
-    for (int k = first; k < landmarks(); ++k) {  // <= kMaxLandmarks
-      P_.template set_block<2, 2>(Layout::landmark(k), n, cross[k - first]);
-    }
+    P_.append_uncorrelated(dim(), Pll_sym);
     id = add_landmark(l);
     book_[landmarks() - 1].flags = kConfirmedFlag;
     return Status::kOk;

@@ -70,6 +70,7 @@ static_assert(std::is_same<decltype(proto::Config::node_budget), NodeCount>::val
               "CONFIG's node budget is the library's NodeCount");
 static_assert(std::is_same<decltype(proto::Capabilities::max_jcbb_nodes), NodeCount>::value,
               "CAPABILITIES' node budget is the library's NodeCount");
+static_assert(static_cast<std::size_t>(kMaxSeeds) == proto::kSeedsPerFrame, "SUBMAP_SEED's seeds per frame");
 static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
               "the wire's default batch size is DefaultBounds' observations per scan");
 
@@ -313,6 +314,13 @@ class Node {
           e = proto::Error::kUnknownType;
         }
         break;
+      case proto::MsgType::kSubmapSeed:  // the local maps' seed, with the hand-over
+        if constexpr (OptionalStages<B>::kHandOver) {
+          e = serve<proto::SubmapSeed>(f);
+        } else {
+          e = proto::Error::kUnknownType;
+        }
+        break;
       case proto::MsgType::kShutdown: e = serve<proto::Shutdown>(f); break;
       case proto::MsgType::kOdometry: e = serve<proto::Odometry>(f); break;
       case proto::MsgType::kOdomDelta: e = serve<proto::OdomDelta>(f); break;
@@ -489,6 +497,42 @@ class Node {
     if constexpr (OptionalStages<B>::kHandOver) {
       if (handing_over_) send_submap();
     }
+  }
+
+  /// Out of line and cold: its seeds and answers (288 B) stay out of handle()'s frame.
+  [[gnu::cold, gnu::noinline]] void on_message(const proto::SubmapSeed& m) {
+    if (!running()) return;
+    if (!fresh()) {  // retransmitted: seeded once; its answer again while it is the last one
+      if (have_result_ && m.batch_id == result_.batch_id) send(result_);
+      return;
+    }
+    if (busy()) return;
+    if (m.map_id != map_id_) {
+      invalid();
+      return;
+    }
+    MapSeed<T> seeds[kMaxSeeds];
+    SeedAnswer<T> answers[kMaxSeeds];
+    for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
+      const proto::SeedWire& w = m.items[static_cast<std::size_t>(k)];
+      seeds[k].l << T(w.x_m), T(w.y_m);
+      seeds[k].P << T(w.p00), T(w.p01), T(w.p01), T(w.p11);
+    }
+    if (step_.seed(seeds, m.count, answers) != Status::kOk) {
+      invalid();
+      return;
+    }
+    result_.batch_id = m.batch_id;
+    result_.count = m.count;
+    for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
+      proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(k)];
+      q.outcome = static_cast<proto::PairingOutcome>(answers[k].outcome);
+      q.feature_id = answers[k].id;
+      q.d2 = static_cast<float>(answers[k].d2);
+    }
+    send(result_);
+    applied();
+    have_result_ = true;
   }
 
   [[gnu::cold]] void on_message(const proto::SubmapAck& m) {

@@ -28,6 +28,7 @@
 #include "geojcbb/node/stages/duplicate_merge.hpp"
 #include "geojcbb/node/stages/hypothesis_window.hpp"
 #include "geojcbb/node/stages/loop_check.hpp"
+#include "geojcbb/node/stages/map_seed.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
 #include "geojcbb/node/stages/relocaliser.hpp"
 #include "geojcbb/node/stages/seeding.hpp"
@@ -62,6 +63,7 @@ class SlamStep {
     if (!OptionalStages<B>::kHypotheses && (s.hypothesis_rivals > 0 || s.cluster_first)) return Status::kInvalidInput;
     if (!OptionalStages<B>::kHandOver && (s.submap_landmarks > 0 || s.submap_distance_m > 0 || s.submap_scans > 0))
       return Status::kInvalidInput;
+    if (!OptionalStages<B>::kDuplicateMerge && s.duplicate_merge_d2 > 0) return Status::kInvalidInput;
     double gate = 0;
     Status st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
@@ -135,10 +137,12 @@ class SlamStep {
     if (st == Status::kOk) begin_map();
     return st;
   }
-  /// A landmark of the global map seeded into the new local map (ekf::Slam::seed_landmark).
-  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, const Mat2<T>* cross, int first,
-                                     FeatureId& id) {
-    return slam_.seed_landmark(l, Pll, cross, first, id);
+  /// Landmarks of the global map seeded into the local map (stages/map_seed.hpp: each added unless
+  /// one the map holds is compatible with it or there is no room). @return the statuses of seed_map;
+  /// kInvalidInput when not configured.
+  [[nodiscard]] Status seed(const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
+    if (!configured_) return Status::kInvalidInput;
+    return seed_map(slam_, cfg_.local_radius_m, static_cast<T>(cfg_.gate.individual), seeds, count, out);
   }
   /// Metres travelled and scans taken since the local map began (reset, restart).
   T travelled_m() const { return travelled_m_; }
@@ -444,7 +448,9 @@ class SlamStep {
       }
     }
     // The scan's observed landmarks (paired, or added from it) are distinct for good.
-    if (cfg_.duplicate_merge_d2 > T(0)) merge_.note(slam_, out, cfg_.duplicate_merge_d2, cfg_.gate.individual);
+    constexpr bool kMerge = OptionalStages<B>::kDuplicateMerge;  // compiled out: configure() refused it
+    if (kMerge && cfg_.duplicate_merge_d2 > T(0))
+      merge_.note(slam_, out, cfg_.duplicate_merge_d2, cfg_.gate.individual);
     if (cfg_.tentative_isolated) tentative_.catch_movers(map, assoc_);
     ekf::ReviewStats rs;
     // The view and policy were validated by configure(), the counts above. A scan the hypothesis
@@ -458,7 +464,7 @@ class SlamStep {
         rs.removed_moved += slam_.forget(tentative_.jumped(k)) == Status::kOk;
       }
     }
-    if (cfg_.duplicate_merge_d2 > T(0) && !hold)
+    if (kMerge && cfg_.duplicate_merge_d2 > T(0) && !hold)
       rs.merged = merge_.merge(cfg_.duplicate_merge_d2, pred_, out, slam_, ekf_ws_);
     const std::uint32_t t4 = clock ? clock() : 0;
     out.diag = assoc_.diag;

@@ -82,8 +82,8 @@ struct JoinResult : JoinCounts {
   std::vector<std::pair<FeatureId, FeatureId>> pairs;
 };
 
-/// Global landmarks given to the next local map (its seed): their means in the base's frame (the new
-/// map's origin) and their joint covariance there, conditioned on the origin.
+/// Global landmarks given to the local map (its seed): their means in the base's frame (the map's
+/// origin) and their covariance there, block-diagonal (each one's marginal, as SUBMAP_SEED carries it).
 struct Seed {
   std::vector<FeatureId> first_ids;  ///< the global landmarks (their first ids)
   Eigen::VectorXd x;                 ///< 2 per landmark
@@ -99,23 +99,19 @@ class GlobalMap {
 
   /// Joins a closed local map. Throws std::runtime_error when the association fails (its status).
   JoinResult join(const Submap& m);
-  /// A landmark of the local map being built: its id and its estimate in the map's frame (the base's).
-  struct Held {
-    FeatureId id = -1;
-    Eigen::Vector2d x = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
-  };
-  /// A seed of the current local map: the global landmarks within radius_m of `center` (a point in
-  /// the global frame: where the robot is), nearest first, at most max_count. Left out: those a
-  /// landmark of `held` stands for (its id was carried, seeded or joined), those seeded into this
-  /// map before, those individually compatible (chi2(confidence, 2)) with a held landmark (one
-  /// mapped anew in this map: the join associates the two, a seed would make a duplicate), and those
-  /// compatible with another global landmark near them (ambiguous: a seed is an unchecked closure). Their means and covariance are in the base's frame (the local map's origin) and
-  /// depend on the global state alone, which does not change while the map is built, so a map may
-  /// be seeded at any scan. Remembered as that map's prior on them once seeded() names their ids.
-  Seed seed(const Eigen::Vector2d& center, double radius_m, int max_count, const std::vector<Held>& held) const;
-  /// The local map took seed `s`, its landmark k under local_ids[k]. Seeds of one map add up; the
-  /// landmarks of two seeds are uncorrelated in the prior (as the device holds them).
+  /// A seed of the current local map (docs/submaps.md, "Seed"): the global landmarks within
+  /// radius_m of `center` (a point in the global frame: where the robot is), nearest first, at most
+  /// max_count. Left out: those a landmark of the map stands for (`held`: the local ids it holds,
+  /// carried, seeded or joined), those seeded into this map before or refused by it (compatible with
+  /// a landmark it made anew), and those compatible (chi2(confidence, 2)) with another global
+  /// landmark near them (ambiguous: a seed is an unchecked closure). Each one's mean and marginal
+  /// covariance are in the base's frame (the local map's origin), uncorrelated with each other, as
+  /// SUBMAP_SEED carries them; they depend on the global state alone, which does not change while the
+  /// map is built, so a map may be seeded at any scan. The map decides which it takes (node::seed_map).
+  Seed seed(const Eigen::Vector2d& center, double radius_m, int max_count, const std::vector<FeatureId>& held) const;
+  /// The local map's answer to seed `s`, one local id per seed: >= 0, it took the seed under that id
+  /// (remembered as the map's prior on it); kUnmatched, it holds one compatible with it (not offered
+  /// again to this map); kNewFeature, no room (offered again).
   void seeded(const Seed& s, const std::vector<FeatureId>& local_ids);
   /// The global position of the base's point `local`.
   Eigen::Vector2d to_global(const Eigen::Vector2d& local) const;
@@ -155,6 +151,7 @@ class GlobalMap {
   std::unique_ptr<Submap> prev_;                        ///< the last map joined: the next one's prior
   Seed seed_;                                           ///< the current map's seeds, stacked
   std::vector<FeatureId> seed_ids_;                     ///< its landmarks' local ids
+  std::vector<FeatureId> seed_refused_;                 ///< first ids the current map refused (compatible)
   std::unordered_map<FeatureId, FeatureId> global_of_;  ///< local id -> its global landmark's first id
   std::unique_ptr<Association> assoc_;                  ///< the association's workspace (large: on the heap)
 };

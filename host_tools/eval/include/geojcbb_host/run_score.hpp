@@ -91,6 +91,7 @@ struct SubmapStats {
   int declined = 0;               ///< ambiguous pairings kept apart
   int refused = 0;                ///< joins refused (their pairs not jointly compatible)
   int wrong = 0;                  ///< fused pairs of two different true landmarks (labelled data)
+  int seeded = 0;                 ///< global landmarks the local maps took as seeds (--submap-seed)
   std::vector<JoinRecord> joins;  ///< per local map: what its join did
   // Through a device (stream_run):
   int frames = 0;                  ///< SUBMAP and SUBMAP_COV frames received (one sending per map)

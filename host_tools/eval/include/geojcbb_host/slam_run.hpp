@@ -48,9 +48,10 @@ struct RunOptions {
   /// StepSettings::submap_*) is joined into a GlobalMap with these options, and the step restarts.
   /// The pose and map reported are the global ones.
   bool submaps = false;
-  /// Before each scan, the local map is seeded with the global landmarks within r + d of the robot
-  /// that it does not hold (GlobalMap::seed), at most the default device's candidates less its own
-  /// landmarks there, and never past its capacity less a scan (docs/submaps.md, "Seed").
+  /// Before each scan, the local map is offered the global landmarks within r + d of the robot that
+  /// it does not hold (GlobalMap::seed, at most kSeedsPerFrame), and takes those none of its own is
+  /// compatible with, within its candidates and its capacity less a scan (node::seed_map; through a
+  /// device, SUBMAP_SEED: docs/submaps.md, "Seed").
   bool submap_seed = false;
   JoinOptions join;
   std::string join_preset = "PCJCBB";  ///< join.preset's name (the command line's), read by step_settings

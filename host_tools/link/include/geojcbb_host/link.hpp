@@ -76,6 +76,12 @@ class LinkClient {
   /// Waits for the ASSOC_RESULT and POSE of `batch_id`. Replies of earlier batches (duplicates after
   /// a retransmission) are skipped and counted; a later batch's reply first throws kLost.
   ScanReply receive_scan(std::uint32_t batch_id);
+  /// SUBMAP_SEED, a stream frame numbered as the batches: global landmarks for the current local map.
+  void send_seed(const proto::SubmapSeed& s);
+  /// Waits for the ASSOC_RESULT of seed `batch_id` (one pairing per seed: seeded with its id,
+  /// compatible with a landmark the map holds, or no room). Earlier replies are skipped as in
+  /// receive_scan.
+  LinkAssocResult receive_seed(std::uint32_t batch_id);
   /// A local map as it came over the link (docs/submaps.md).
   struct WireSubmap {
     std::uint32_t map_id = 0;
@@ -143,6 +149,9 @@ class LinkClient {
   template <class M>
   M wait_for(const char* what);
   void note_stats(const Frame& f);
+  /// Waits for the ASSOC_RESULT (and with_pose the POSE) of batch or seed `batch_id`; then its frames
+  /// and the ones before it need no retransmission.
+  ScanReply receive_reply(std::uint32_t batch_id, bool with_pose, const std::string& what);
   /// NACK/ERROR about a frame sent before the last CONFIG, RESET or reconnection: ignored.
   bool stale(std::uint16_t seq) const;
 

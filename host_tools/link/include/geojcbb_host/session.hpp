@@ -48,6 +48,8 @@ class LinkSession : public ScanLink {
   void relocalise(const proto::Relocalise& r) override;
   void send_scan(const LinkObsBatch& b) override;
   LinkClient::ScanReply receive_scan(std::uint32_t batch_id) override;
+  void send_seed(const proto::SubmapSeed& s) override;
+  LinkAssocResult receive_seed(std::uint32_t batch_id) override;
   LinkClient::WireSubmap receive_submap(std::uint32_t map_id) override;
   void request_submap(std::uint32_t map_id) override;
   void submap_received(std::uint32_t map_id) override;

@@ -67,6 +67,9 @@ class ScanLink {
   virtual void relocalise(const proto::Relocalise& r) = 0;
   virtual void send_scan(const LinkObsBatch& b) = 0;
   virtual LinkClient::ScanReply receive_scan(std::uint32_t batch_id) = 0;
+  /// LinkClient::send_seed and receive_seed.
+  virtual void send_seed(const proto::SubmapSeed& s) = 0;
+  virtual LinkAssocResult receive_seed(std::uint32_t batch_id) = 0;
   /// A local map's hand-over (docs/submaps.md): its frames, asking again when they do not come
   /// (LinkClient::receive_submap); the current map closed at the host's request; the ACK.
   virtual LinkClient::WireSubmap receive_submap(std::uint32_t map_id) = 0;
@@ -87,6 +90,8 @@ class PlainLink : public ScanLink {
   void relocalise(const proto::Relocalise& r) override { c_.relocalise(r); }
   void send_scan(const LinkObsBatch& b) override { c_.send_scan(b); }
   LinkClient::ScanReply receive_scan(std::uint32_t id) override { return c_.receive_scan(id); }
+  void send_seed(const proto::SubmapSeed& s) override { c_.send_seed(s); }
+  LinkAssocResult receive_seed(std::uint32_t id) override { return c_.receive_seed(id); }
   LinkClient::WireSubmap receive_submap(std::uint32_t id) override { return c_.receive_submap(id); }
   void request_submap(std::uint32_t id) override { c_.request_submap(id); }
   void submap_received(std::uint32_t id) override { c_.submap_received(id); }

@@ -36,6 +36,7 @@ enum class MsgType : std::uint8_t {
   kOdometry = 0x10,      ///< host -> device, stream
   kObsBatch = 0x11,      ///< host -> device, stream
   kOdomDelta = 0x12,     ///< host -> device, stream
+  kSubmapSeed = 0x13,    ///< host -> device, stream: global landmarks for the current local map
   kAssocResult = 0x20,   ///< device -> host
   kPose = 0x21,          ///< device -> host
   kSubmap = 0x22,        ///< device -> host, a closed local map's header and landmarks
@@ -565,9 +566,10 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
   std::array<PairingWire, MaxObs> pairs{};
 
   static constexpr auto fields() {
-    return std::make_tuple(field("batch_id", &AssocResultT::batch_id, range::any(), "", "the OBS_BATCH's"),
-                           list("count", &AssocResultT::count, &AssocResultT::pairs, "pairs",
-                                "≤ `MaxObs`, and `len` = fixed + item size · count exactly"));
+    return std::make_tuple(
+        field("batch_id", &AssocResultT::batch_id, range::any(), "", "the OBS_BATCH's or SUBMAP_SEED's"),
+        list("count", &AssocResultT::count, &AssocResultT::pairs, "pairs",
+             "≤ `MaxObs`, and `len` = fixed + item size · count exactly"));
   }
 };
 using AssocResult = AssocResultT<>;
@@ -658,7 +660,7 @@ struct Submap : Codec<Submap> {
 
   std::uint32_t map_id = 0;     ///< 0, 1, ... since RESET
   std::uint16_t chunk = 0;      ///< this frame's index in the hand-over
-  std::uint16_t chunks = 1;     ///< the hand-over's frames (SUBMAP and SUBMAP_COV)
+  std::uint16_t chunks = 2;     ///< the hand-over's frames (SUBMAP and SUBMAP_COV): at least 2
   std::uint16_t landmarks = 0;  ///< n, the map's landmarks
   std::uint16_t first = 0;      ///< the index of this frame's first landmark
   float x_m = 0.0f;             ///< the robot's last pose in the map's frame (the state's first three)
@@ -732,6 +734,53 @@ struct SubmapAck : Codec<SubmapAck> {
                                  "the pending (or current) map's; the last map's again: ACK; else NACK `kOutOfRange`"),
                            field("send", &SubmapAck::send, range::one_of(0, 1), "",
                                  "1: send the map (again while pending; the current one: closed now)"));
+  }
+};
+
+/// Seeds per SUBMAP_SEED frame: a place seen before enters the local map a few landmarks a scan
+/// (the struct, which the device decodes on its stack, is 172 bytes).
+constexpr std::size_t kSeedsPerFrame = 8;
+
+struct SeedWire {
+  static constexpr const char* kRule = "positive-definite";
+
+  float x_m = 0.0f;  ///< in the local map's frame
+  float y_m = 0.0f;
+  float p00 = 1.0f;  ///< its covariance there [p00 p01; p01 p11]: the global map's marginal
+  float p01 = 0.0f;
+  float p11 = 1.0f;
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("x_m", &SeedWire::x_m, range::finite(), "m", "the local map's frame"),
+                           field("y_m", &SeedWire::y_m, range::finite(), "m"),
+                           field("p00", &SeedWire::p00, range::finite(), "m²", "[p00 p01; p01 p11] positive definite"),
+                           field("p01", &SeedWire::p01, range::finite(), "m²"),
+                           field("p11", &SeedWire::p11, range::finite(), "m²"));
+  }
+  [[nodiscard]] Error rule() const { return detail::spd2(p00, p01, p11) ? Error::kOk : Error::kNotPositiveDefinite; }
+};
+
+/// SUBMAP_SEED, host -> device (stream, between scans): landmarks of the global map near the robot
+/// that the current local map does not hold (docs/submaps.md, "Seed"), in its frame, each with its
+/// marginal covariance (uncorrelated with the map and with each other). The device answers
+/// ASSOC_RESULT with this batch_id, one pairing per seed in order: kNewLandmark (seeded, the id it
+/// took), kUnmatched (a landmark the map holds is compatible with it, d2 the distance: the join pairs
+/// them) or kNotAugmented (no room: the region's candidates or the map's capacity less a scan). A
+/// retransmission is answered again, not applied twice.
+struct SubmapSeed : Codec<SubmapSeed> {
+  static constexpr MsgType kType = MsgType::kSubmapSeed;
+  static constexpr const char* kName = "SUBMAP_SEED";
+
+  std::uint32_t batch_id = 0;  ///< echoed by ASSOC_RESULT (the host numbers seeds and batches alike)
+  std::uint32_t map_id = 0;    ///< the current local map's (another: ERROR kOutOfRange, nothing seeded)
+  std::uint8_t count = 0;      ///< <= kSeedsPerFrame
+  std::array<SeedWire, kSeedsPerFrame> items{};
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("batch_id", &SubmapSeed::batch_id, range::any(), "", "echoed by ASSOC_RESULT"),
+                           field("map_id", &SubmapSeed::map_id, range::any(), "", "the current local map's"),
+                           list("count", &SubmapSeed::count, &SubmapSeed::items, "seeds",
+                                "≤ 8, and `len` = fixed + item size · count exactly"));
   }
 };
 
@@ -819,8 +868,8 @@ struct MessageList {
 };
 template <std::size_t MaxObs = kDefaultMaxObsPerBatch>
 using AllMessages = MessageList<Hello, Capabilities, Config, Ack, Nack, Ping, Pong, Reset, Shutdown, Relocalise,
-                                SubmapAck, Odometry, OdomDelta, ObsBatchT<MaxObs>, AssocResultT<MaxObs>, Pose, Submap,
-                                SubmapCov, StatsRequest, Stats, ErrorReport>;
+                                SubmapAck, Odometry, OdomDelta, ObsBatchT<MaxObs>, SubmapSeed, AssocResultT<MaxObs>,
+                                Pose, Submap, SubmapCov, StatsRequest, Stats, ErrorReport>;
 
 namespace detail {
 template <class... M>
@@ -846,7 +895,7 @@ constexpr std::array<MsgType, AllMessages<>::kSize> kAllMsgTypes = detail::types
 
 /// True when t is a type number of this schema.
 constexpr bool is_known_type(std::uint8_t t) {
-  for (const MsgType k : kAllMsgTypes) {  // <= 21
+  for (const MsgType k : kAllMsgTypes) {  // <= 22
     if (static_cast<std::uint8_t>(k) == t) return true;
   }
   return false;
@@ -854,7 +903,7 @@ constexpr bool is_known_type(std::uint8_t t) {
 
 constexpr const char* to_string(MsgType t) {
   constexpr auto kNames = detail::names_of(AllMessages<>{});
-  for (std::size_t i = 0; i < kAllMsgTypes.size(); ++i) {  // <= 21
+  for (std::size_t i = 0; i < kAllMsgTypes.size(); ++i) {  // <= 22
     if (kAllMsgTypes[i] == t) return kNames[i];
   }
   return "?";
@@ -899,7 +948,8 @@ static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Co
                   OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 44 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
                   AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 13 &&
-                  SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5,
+                  SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5 &&
+                  SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 20,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto

@@ -31,11 +31,13 @@ inline constexpr char kSchemaPrologue[] =
     "errors 0=ok 1=incomplete 2=bad_length 3=bad_crc 4=overrun 5=bad_version 6=bad_flags 7=unknown_type "
     "8=wrong_type 9=non_finite 10=out_of_range 11=capacity_exceeded 12=not_positive_definite "
     "13=buffer_too_small 14=schema_mismatch 15=not_ready 16=internal 17=busy\n"
-    "session before_HELLO=HELLO,PING acked=CONFIG,RESET,SHUTDOWN,SUBMAP_ACK stream=ODOMETRY,OBS_BATCH "
-    "stream_applied_once_by_seq_since=CONFIG,RESET retransmit_window=4096 duplicate_last_OBS_BATCH=stored_reply "
+    "session before_HELLO=HELLO,PING acked=CONFIG,RESET,SHUTDOWN,SUBMAP_ACK "
+    "stream=ODOMETRY,ODOM_DELTA,RELOCALISE,OBS_BATCH,SUBMAP_SEED stream_applied_once_by_seq_since=CONFIG,RESET "
+    "retransmit_window=4096 duplicate_last_OBS_BATCH,SUBMAP_SEED=stored_reply "
     "periodic_STATS=after_POSE_every_stats_period_scans\n"
     "handover after_POSE_with_submap_frames>0=SUBMAP,SUBMAP_COV stream_until_SUBMAP_ACK=busy "
-    "SUBMAP_ACK_send=same_map_again_or_current_closed RESET,CONFIG=map_dropped\n";
+    "SUBMAP_ACK_send=same_map_again_or_current_closed RESET,CONFIG=map_dropped "
+    "SUBMAP_SEED_answer=ASSOC_RESULT_seeded_or_compatible_or_no_room\n";
 
 /// How old (in frame seq, 16-bit serial arithmetic) a stream frame may be and still be recognised
 /// as a retransmission: the device's reference seq follows every frame to at most this far behind

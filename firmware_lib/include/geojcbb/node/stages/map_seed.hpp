@@ -1,0 +1,92 @@
+// node/stages: the seed of a local map from the host's global map (docs/submaps.md, "Seed";
+// SUBMAP_SEED on the link). The host gives landmarks of the global map near the robot that this
+// local map does not hold, each in the map's frame with its own covariance; each is added
+// (ekf::Slam::seed_landmark: confirmed, uncorrelated with the map and with the other seeds) unless
+//   - a landmark the map holds is individually compatible with it (the map made it anew: the join
+//     pairs the two, a seed would be a duplicate), or
+//   - the map has no room: the local region's candidates (kMaxCandidates less the landmarks within
+//     r + d of the robot) or its capacity less one scan's new landmarks.
+// One function, called by SlamStep::seed on the device and in the host's process alike.
+// Bounds: O(count kMaxLandmarks), count <= kMaxSeeds.
+#pragma once
+
+#include <limits>
+
+#include "geojcbb/core/math.hpp"
+#include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/step_result.hpp"
+
+namespace geojcbb::node {
+
+/// Seeds per call: SUBMAP_SEED's kSeedsPerFrame (node/node.hpp static_asserts the agreement).
+constexpr int kMaxSeeds = 8;
+
+/// One landmark of the global map, in the local map's frame.
+template <typename T>
+struct MapSeed {
+  Vec2<T> l = Vec2<T>::Zero();
+  Mat2<T> P = Mat2<T>::Identity();
+};
+
+/// What became of a seed: kNewLandmark (id: the landmark it became), kUnmatched (d2: its distance to
+/// the compatible landmark the map holds) or kNotAugmented (no room).
+template <typename T>
+struct SeedAnswer {
+  Outcome outcome = Outcome::kNotAugmented;
+  FeatureId id = kNewFeature;
+  T d2 = std::numeric_limits<T>::infinity();  ///< the smallest to a landmark of the map (+inf: none)
+};
+
+/// Seeds `count` landmarks into `slam` (see the file's comment). radius_m: r + d; gate_d2: the
+/// individual compatibility gate (chi-square, 2 dof).
+/// @return kOk; kInvalidInput for count out of range; kNonFinite or kNotPositiveDefinite for a seed
+///         (then nothing is seeded). No state changes unless kOk.
+template <typename T, class B>
+[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T radius_m, T gate_d2, const MapSeed<T>* seeds,
+                                         int count, SeedAnswer<T>* out) {
+  if (count < 0 || count > kMaxSeeds) return Status::kInvalidInput;
+  for (int k = 0; k < count; ++k) {  // <= kMaxSeeds: all valid before any is seeded
+    const MapSeed<T>& s = seeds[k];
+    if (!s.l.allFinite() || !s.P.allFinite()) return Status::kNonFinite;
+    const Mat2<T> Ps = symmetric_part(s.P);
+    if (!is_spd(s.P) || !is_spd_scaled<T>(Ps(0, 0), Ps(0, 1), Ps(1, 1))) return Status::kNotPositiveDefinite;
+  }
+  const Vec2<T> at(slam.x(0), slam.x(1));
+  int in_region = 0;
+  for (int j = 0; j < slam.landmarks(); ++j) {  // <= kMaxLandmarks
+    in_region += (slam.landmark(j) - at).squaredNorm() < radius_m * radius_m ? 1 : 0;
+  }
+  int room = B::kMaxCandidates - in_region;
+  if (B::kMaxLandmarks - B::kMaxObservations - slam.landmarks() < room) {
+    room = B::kMaxLandmarks - B::kMaxObservations - slam.landmarks();
+  }
+  for (int k = 0; k < count; ++k) {  // <= kMaxSeeds
+    const MapSeed<T>& s = seeds[k];
+    SeedAnswer<T>& a = out[k];
+    a = SeedAnswer<T>{};
+    for (int j = 0; j < slam.landmarks(); ++j) {  // <= kMaxLandmarks
+      const int r = ekf::Layout::landmark(j);
+      Mat2<T> S;
+      S << s.P(0, 0) + slam.cov(r, r), s.P(0, 1) + slam.cov(r, r + 1), s.P(1, 0) + slam.cov(r + 1, r),
+          s.P(1, 1) + slam.cov(r + 1, r + 1);
+      const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+      if (!(det > T(0))) continue;
+      const Vec2<T> e = s.l - slam.landmark(j);
+      const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
+      if (d2 < a.d2) a.d2 = d2;
+    }
+    if (a.d2 < gate_d2) {
+      a.outcome = Outcome::kUnmatched;
+      a.id = kUnmatched;
+      continue;
+    }
+    if (room <= 0) continue;  // kNotAugmented
+    const Status st = slam.seed_landmark(s.l, s.P, a.id);
+    if (st != Status::kOk) return st;  // not reached: validated above, and the room is within capacity
+    a.outcome = Outcome::kNewLandmark;
+    --room;
+  }
+  return Status::kOk;
+}
+
+}  // namespace geojcbb::node
