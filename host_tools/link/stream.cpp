@@ -236,7 +236,11 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
   }
   Eigen::Vector2d here(src.x0.x, src.x0.y);
-  std::vector<FeatureId> held;
+  std::vector<FeatureId> held;  // sorted, each id once (bounded by the map's landmarks)
+  auto hold = [&held](FeatureId id) {
+    const auto at = std::lower_bound(held.begin(), held.end(), id);
+    if (at == held.end() || *at != id) held.insert(at, id);
+  };
   auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
     for (const RunInput& in : ins) {
       last_pose = moved(last_pose, in);
@@ -282,7 +286,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     for (std::size_t k = 0; k < m.count; ++k) {
       ids[k] = a.pairs[k].feature_id;
       if (ids[k] < 0) continue;
-      held.push_back(ids[k]);
+      hold(ids[k]);
       const auto first = static_cast<std::size_t>(seed.first_ids[k]);
       scorer.added(ids[k], first < id_truth.size() ? id_truth[first] : RunScorer::kUnknown);
     }
@@ -307,7 +311,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     scorer.score(f.truth, paired);
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
-      if (q.feature_id >= 0) held.push_back(q.feature_id);
+      if (q.feature_id >= 0) hold(q.feature_id);
       if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
       not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
     }

@@ -740,6 +740,8 @@ TEST_CASE(
   const int j = s.index_of(next);
   REQUIRE(j >= 0);
   CHECK(s.confirmed(j));
+  const ekf::LandmarkPolicy policy;  // the evidence it banked where it was made: the policy's saturation
+  CHECK(s.existence(j) == policy.confirm_nats + policy.reserve_nats);
   CHECK(s.landmark(j).x() == 1.0f);
   CHECK(s.landmark(j).y() == 8.0f);
   const int row = ekf::Layout::landmark(j);

@@ -106,21 +106,25 @@ TEST_CASE("restart: kept landmarks in the robot's frame with J P J^T, the pose a
   CHECK(id == next);
 }
 
-TEST_CASE("seed_landmark: a confirmed landmark uncorrelated with the map; bad input refused, nothing changed") {
+TEST_CASE(
+    "seed_landmark: a confirmed landmark with its existence, uncorrelated with the map; bad input refused, nothing changed") {
   auto slam = std::make_unique<Slam<double, SB>>();
   REQUIRE(slam->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-6) == Status::kOk);
   FeatureId a = -1, b = -1;
   Mat2<double> Pa;
   Pa << 0.04, 0.01, 0.01, 0.09;
-  REQUIRE(slam->seed_landmark(Vec2<double>(3, 1), Pa, a) == Status::kOk);
+  REQUIRE(slam->seed_landmark(Vec2<double>(3, 1), Pa, 100.0, a) == Status::kOk);
   Mat2<double> bad = Pa;
   bad(1, 1) = -1;
-  CHECK(slam->seed_landmark(Vec2<double>(5, 1), bad, b) == Status::kNotPositiveDefinite);
-  CHECK(slam->seed_landmark(Vec2<double>(5, std::nan("")), Pa, b) == Status::kNonFinite);
+  CHECK(slam->seed_landmark(Vec2<double>(5, 1), bad, 100.0, b) == Status::kNotPositiveDefinite);
+  CHECK(slam->seed_landmark(Vec2<double>(5, std::nan("")), Pa, 100.0, b) == Status::kNonFinite);
+  CHECK(slam->seed_landmark(Vec2<double>(5, 1), Pa, std::nan(""), b) == Status::kNonFinite);
   CHECK(slam->landmarks() == 1);
-  REQUIRE(slam->seed_landmark(Vec2<double>(5, 1), Pa, b) == Status::kOk);
+  REQUIRE(slam->seed_landmark(Vec2<double>(5, 1), Pa, 7.5, b) == Status::kOk);
   CHECK(slam->confirmed(0));
   CHECK(slam->confirmed(1));
+  CHECK(slam->existence(0) == 100.0);  // as given: the evidence banked where it was made
+  CHECK(slam->existence(1) == 7.5);
   CHECK(b == a + 1);
   const int la = Layout::landmark(0), lb = Layout::landmark(1);
   CHECK(slam->cov(lb, lb + 1) == 0.01);
@@ -175,5 +179,39 @@ TEST_CASE("closing rule: a map is due after its landmarks (once it has added one
   for (int k = 1; k <= 3; ++k) {
     REQUIRE(s->step(obs, *res) == Status::kOk);
     CHECK(res->submap_due == (k == 3));
+  }
+}
+
+TEST_CASE(
+    "seed: room is the capacity less one scan, not the region's candidates; a seed banks the policy's existence") {
+  using B = Bounds<5, 6, 5, 1000, 21>;  // 6 candidates, 21 landmarks: room for 21 - 5 = 16 seeds
+  auto s = std::make_unique<node::SlamStep<double, B>>();
+  node::StepSettings<double> st;
+  st.local_radius_m = 15;
+  st.max_range_m = 10;
+  REQUIRE(s->configure(st) == Status::kOk);
+  REQUIRE(s->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-4) == Status::kOk);
+  node::MapSeed<double> in[node::kMaxSeeds];
+  node::SeedAnswer<double> out[node::kMaxSeeds];
+  auto seed_ring = [&](int call) {  // 8 seeds 3 m apart, all within the region (r + d = 15 m)
+    for (int k = 0; k < node::kMaxSeeds; ++k) {
+      const double a = 0.39 * (8 * call + k);
+      in[k].l = Vec2<double>(3 + 0.5 * call, 0) + 2.0 * Vec2<double>(std::cos(a), std::sin(a)) * (1 + call);
+      in[k].P = Mat2<double>::Identity() * 0.01;
+    }
+    return s->seed(in, node::kMaxSeeds, out);
+  };
+  REQUIRE(seed_ring(0) == Status::kOk);
+  REQUIRE(seed_ring(1) == Status::kOk);
+  CHECK(s->slam().landmarks() == 16);  // more than the region's 6 candidates: the nearest are predicted
+  for (int k = 0; k < node::kMaxSeeds; ++k) CHECK(out[k].outcome == node::Outcome::kNewLandmark);
+  const ekf::LandmarkPolicy policy;
+  for (int j = 0; j < 16; ++j)
+    CHECK(s->slam().existence(j) == doctest::Approx(policy.confirm_nats + policy.reserve_nats));
+  REQUIRE(seed_ring(2) == Status::kOk);  // no room left for a scan's new landmarks
+  CHECK(s->slam().landmarks() == 16);
+  for (int k = 0; k < node::kMaxSeeds; ++k) {
+    CHECK(out[k].outcome == node::Outcome::kNotAugmented);
+    CHECK(out[k].id == kNewFeature);
   }
 }

@@ -745,18 +745,21 @@ class Slam {
 
   /// A landmark of the global map given to this local map (docs/submaps.md, "Seed"; node::seed_map):
   /// at l in this map's frame with covariance Pll, uncorrelated with the pose and with every other
-  /// landmark (the seeds' prior is block-diagonal, as SUBMAP_SEED carries it). It starts confirmed.
+  /// landmark (the seeds' prior is block-diagonal, as SUBMAP_SEED carries it). It starts confirmed,
+  /// with `exist_nats` of existence (the caller's policy's saturation: its evidence was banked in the
+  /// maps that made it, which this one cannot see, so a few misses here do not remove it).
   /// @param[out] id  the new landmark's id
   /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll (checked as augment() does);
   ///         kCapacityExceeded. No state changes unless kOk.  O(n)
-  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
-    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
+  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, T exist_nats, FeatureId& id) {
+    if (!l.allFinite() || !Pll.allFinite() || !std::isfinite(exist_nats)) return Status::kNonFinite;
     const Mat2<T> Pll_sym = symmetric_part(Pll);
     if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
     if (book_.full()) return Status::kCapacityExceeded;
     P_.append_uncorrelated(dim(), Pll_sym);
     id = add_landmark(l);
     book_[landmarks() - 1].flags = kConfirmedFlag;
+    book_[landmarks() - 1].exist = exist_nats;
     return Status::kOk;
   }
 

@@ -142,7 +142,8 @@ class SlamStep {
   /// kInvalidInput when not configured.
   [[nodiscard]] Status seed(const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
     if (!configured_) return Status::kInvalidInput;
-    return seed_map(slam_, cfg_.local_radius_m, static_cast<T>(cfg_.gate.individual), seeds, count, out);
+    return seed_map(slam_, static_cast<T>(cfg_.gate.individual),
+                    static_cast<T>(policy_.confirm_nats + policy_.reserve_nats), seeds, count, out);
   }
   /// Metres travelled and scans taken since the local map began (reset, restart).
   T travelled_m() const { return travelled_m_; }

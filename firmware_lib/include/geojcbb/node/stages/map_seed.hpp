@@ -1,15 +1,20 @@
 // node/stages: the seed of a local map from the host's global map (docs/submaps.md, "Seed";
 // SUBMAP_SEED on the link). The host gives landmarks of the global map near the robot that this
 // local map does not hold, each in the map's frame with its own covariance; each is added
-// (ekf::Slam::seed_landmark: confirmed, uncorrelated with the map and with the other seeds) unless
+// (ekf::Slam::seed_landmark: confirmed, with the existence a landmark can bank, uncorrelated with
+// the map and with the other seeds) unless
 //   - a landmark the map holds is individually compatible with it (the map made it anew: the join
 //     pairs the two, a seed would be a duplicate), or
-//   - the map has no room: the local region's candidates (kMaxCandidates less the landmarks within
-//     r + d of the robot) or its capacity less one scan's new landmarks.
+//   - the map has no room: its capacity less one scan's new landmarks. (The local region's
+//     candidates do not bound it: the prediction keeps the kMaxCandidates nearest, and a seed beyond
+//     them waits until the robot is nearer. Bounding the seed by the region's free candidates kept
+//     Victoria Park's maps from their old trees on the default image: its region held 31-71
+//     landmarks at the seeds, nearly always more than the image's 32; docs/submaps.md.)
 // One function, called by SlamStep::seed on the device and in the host's process alike.
 // Bounds: O(count kMaxLandmarks), count <= kMaxSeeds.
 #pragma once
 
+#include <cmath>
 #include <limits>
 
 #include "geojcbb/core/math.hpp"
@@ -37,29 +42,22 @@ struct SeedAnswer {
   T d2 = std::numeric_limits<T>::infinity();  ///< the smallest to a landmark of the map (+inf: none)
 };
 
-/// Seeds `count` landmarks into `slam` (see the file's comment). radius_m: r + d; gate_d2: the
-/// individual compatibility gate (chi-square, 2 dof).
+/// Seeds `count` landmarks into `slam` (see the file's comment). gate_d2: the individual
+/// compatibility gate (chi-square, 2 dof); exist_nats: each seed's log-odds of existence (the
+/// policy's saturation, LandmarkPolicy confirm_nats + reserve_nats).
 /// @return kOk; kInvalidInput for count out of range; kNonFinite or kNotPositiveDefinite for a seed
 ///         (then nothing is seeded). No state changes unless kOk.
 template <typename T, class B>
-[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T radius_m, T gate_d2, const MapSeed<T>* seeds,
+[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T exist_nats, const MapSeed<T>* seeds,
                                          int count, SeedAnswer<T>* out) {
-  if (count < 0 || count > kMaxSeeds) return Status::kInvalidInput;
+  if (count < 0 || count > kMaxSeeds || !std::isfinite(exist_nats)) return Status::kInvalidInput;
   for (int k = 0; k < count; ++k) {  // <= kMaxSeeds: all valid before any is seeded
     const MapSeed<T>& s = seeds[k];
     if (!s.l.allFinite() || !s.P.allFinite()) return Status::kNonFinite;
     const Mat2<T> Ps = symmetric_part(s.P);
     if (!is_spd(s.P) || !is_spd_scaled<T>(Ps(0, 0), Ps(0, 1), Ps(1, 1))) return Status::kNotPositiveDefinite;
   }
-  const Vec2<T> at(slam.x(0), slam.x(1));
-  int in_region = 0;
-  for (int j = 0; j < slam.landmarks(); ++j) {  // <= kMaxLandmarks
-    in_region += (slam.landmark(j) - at).squaredNorm() < radius_m * radius_m ? 1 : 0;
-  }
-  int room = B::kMaxCandidates - in_region;
-  if (B::kMaxLandmarks - B::kMaxObservations - slam.landmarks() < room) {
-    room = B::kMaxLandmarks - B::kMaxObservations - slam.landmarks();
-  }
+  int room = B::kMaxLandmarks - B::kMaxObservations - slam.landmarks();
   for (int k = 0; k < count; ++k) {  // <= kMaxSeeds
     const MapSeed<T>& s = seeds[k];
     SeedAnswer<T>& a = out[k];
@@ -81,7 +79,7 @@ template <typename T, class B>
       continue;
     }
     if (room <= 0) continue;  // kNotAugmented
-    const Status st = slam.seed_landmark(s.l, s.P, a.id);
+    const Status st = slam.seed_landmark(s.l, s.P, exist_nats, a.id);
     if (st != Status::kOk) return st;  // not reached: validated above, and the room is within capacity
     a.outcome = Outcome::kNewLandmark;
     --room;
