@@ -214,4 +214,13 @@ TEST_CASE(
     CHECK(out[k].outcome == node::Outcome::kNotAugmented);
     CHECK(out[k].id == kNewFeature);
   }
+  // A closing size below the capacity bounds the seeds too: seeds alone never make the map due.
+  st.submap_landmarks = 10;
+  REQUIRE(s->configure(st) == Status::kOk);
+  REQUIRE(s->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-4) == Status::kOk);
+  REQUIRE(seed_ring(0) == Status::kOk);
+  REQUIRE(seed_ring(1) == Status::kOk);
+  CHECK(s->slam().landmarks() == 10);
+  CHECK(out[1].outcome == node::Outcome::kNewLandmark);
+  CHECK(out[2].outcome == node::Outcome::kNotAugmented);
 }

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/ekf/slam.hpp"
 
 namespace geojcbb::ekf {
@@ -187,7 +188,8 @@ void Slam<T, B>::move_kept(const std::int16_t (&keep)[B::kMaxLandmarks], int kep
 
 template <typename T, class B>
 void Slam<T, B>::reanchor() {
-  const T px = x_[0], py = x_[1], c = std::cos(x_[2]), sn = std::sin(x_[2]);
+  // fmath: the same bits on the device and on the host (libm's sinf/cosf differ between them).
+  const T px = x_[0], py = x_[1], c = fmath::cos(x_[2]), sn = fmath::sin(x_[2]);
   Mat2<T> Rt;  // R(theta)^T
   Rt << c, sn, -sn, c;
   const Mat3<T> Prr = P_.template block<3, 3>(0, 0);

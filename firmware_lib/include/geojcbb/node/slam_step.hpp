@@ -138,12 +138,16 @@ class SlamStep {
     return st;
   }
   /// Landmarks of the global map seeded into the local map (stages/map_seed.hpp: each added unless
-  /// one the map holds is compatible with it or there is no room). @return the statuses of seed_map;
-  /// kInvalidInput when not configured.
+  /// one the map holds is compatible with it or there is no room: the closing size or the capacity
+  /// less one scan). @return the statuses of seed_map; kInvalidInput when not configured.
   [[nodiscard]] Status seed(const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
     if (!configured_) return Status::kInvalidInput;
+    int limit = B::kMaxLandmarks - B::kMaxObservations;
+    if (cfg_.submap_landmarks > 0 && static_cast<int>(cfg_.submap_landmarks) < limit) {
+      limit = static_cast<int>(cfg_.submap_landmarks);
+    }
     return seed_map(slam_, static_cast<T>(cfg_.gate.individual),
-                    static_cast<T>(policy_.confirm_nats + policy_.reserve_nats), seeds, count, out);
+                    static_cast<T>(policy_.confirm_nats + policy_.reserve_nats), limit, seeds, count, out);
   }
   /// Metres travelled and scans taken since the local map began (reset, restart).
   T travelled_m() const { return travelled_m_; }

@@ -5,7 +5,9 @@
 // the map and with the other seeds) unless
 //   - a landmark the map holds is individually compatible with it (the map made it anew: the join
 //     pairs the two, a seed would be a duplicate), or
-//   - the map has no room: its capacity less one scan's new landmarks. (The local region's
+//   - the map has no room: `limit` landmarks, its closing size (submap_landmarks) or its capacity
+//     less one scan's new landmarks, whichever is smaller, so that seeds alone never make the map
+//     due. (The local region's
 //     candidates do not bound it: the prediction keeps the kMaxCandidates nearest, and a seed beyond
 //     them waits until the robot is nearer. Bounding the seed by the region's free candidates kept
 //     Victoria Park's maps from their old trees on the default image: its region held 31-71
@@ -44,20 +46,23 @@ struct SeedAnswer {
 
 /// Seeds `count` landmarks into `slam` (see the file's comment). gate_d2: the individual
 /// compatibility gate (chi-square, 2 dof); exist_nats: each seed's log-odds of existence (the
-/// policy's saturation, LandmarkPolicy confirm_nats + reserve_nats).
+/// policy's saturation, LandmarkPolicy confirm_nats + reserve_nats); limit: the landmarks the map may
+/// hold with its seeds (at most kMaxLandmarks - kMaxObservations).
 /// @return kOk; kInvalidInput for count out of range; kNonFinite or kNotPositiveDefinite for a seed
 ///         (then nothing is seeded). No state changes unless kOk.
 template <typename T, class B>
-[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T exist_nats, const MapSeed<T>* seeds,
-                                         int count, SeedAnswer<T>* out) {
-  if (count < 0 || count > kMaxSeeds || !std::isfinite(exist_nats)) return Status::kInvalidInput;
+[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T exist_nats, int limit,
+                                         const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
+  if (count < 0 || count > kMaxSeeds || !std::isfinite(exist_nats) || limit > B::kMaxLandmarks - B::kMaxObservations) {
+    return Status::kInvalidInput;
+  }
   for (int k = 0; k < count; ++k) {  // <= kMaxSeeds: all valid before any is seeded
     const MapSeed<T>& s = seeds[k];
     if (!s.l.allFinite() || !s.P.allFinite()) return Status::kNonFinite;
     const Mat2<T> Ps = symmetric_part(s.P);
     if (!is_spd(s.P) || !is_spd_scaled<T>(Ps(0, 0), Ps(0, 1), Ps(1, 1))) return Status::kNotPositiveDefinite;
   }
-  int room = B::kMaxLandmarks - B::kMaxObservations - slam.landmarks();
+  int room = limit - slam.landmarks();
   for (int k = 0; k < count; ++k) {  // <= kMaxSeeds
     const MapSeed<T>& s = seeds[k];
     SeedAnswer<T>& a = out[k];
