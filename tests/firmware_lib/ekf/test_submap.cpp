@@ -223,4 +223,13 @@ TEST_CASE(
   CHECK(s->slam().landmarks() == 10);
   CHECK(out[1].outcome == node::Outcome::kNewLandmark);
   CHECK(out[2].outcome == node::Outcome::kNotAugmented);
+  // Bad parameters: refused, nothing seeded.
+  auto slam = std::make_unique<Slam<double, B>>();
+  REQUIRE(slam->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-4) == Status::kOk);
+  CHECK(node::seed_map(*slam, 9.2, std::nan(""), 16, in, 1, out) == Status::kInvalidInput);
+  CHECK(node::seed_map(*slam, 9.2, 100.0, 17, in, 1, out) == Status::kInvalidInput);  // over 21 - 5
+  CHECK(node::seed_map(*slam, 9.2, 100.0, 16, in, node::kMaxSeeds + 1, out) == Status::kInvalidInput);
+  CHECK(slam->landmarks() == 0);
+  REQUIRE(node::seed_map(*slam, 9.2, 100.0, 16, in, 1, out) == Status::kOk);
+  CHECK(slam->landmarks() == 1);
 }

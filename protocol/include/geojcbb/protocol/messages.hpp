@@ -765,7 +765,7 @@ struct SeedWire {
 /// marginal covariance (uncorrelated with the map and with each other). The device answers
 /// ASSOC_RESULT with this batch_id, one pairing per seed in order: kNewLandmark (seeded, the id it
 /// took), kUnmatched (a landmark the map holds is compatible with it, d2 the distance: the join pairs
-/// them) or kNotAugmented (no room: the region's candidates or the map's capacity less a scan). A
+/// them) or kNotAugmented (no room: the map's closing size or its capacity less a scan). A
 /// retransmission is answered again, not applied twice.
 struct SubmapSeed : Codec<SubmapSeed> {
   static constexpr MsgType kType = MsgType::kSubmapSeed;

@@ -7,11 +7,11 @@
 //     pairs the two, a seed would be a duplicate), or
 //   - the map has no room: `limit` landmarks, its closing size (submap_landmarks) or its capacity
 //     less one scan's new landmarks, whichever is smaller, so that seeds alone never make the map
-//     due. (The local region's
-//     candidates do not bound it: the prediction keeps the kMaxCandidates nearest, and a seed beyond
-//     them waits until the robot is nearer. Bounding the seed by the region's free candidates kept
-//     Victoria Park's maps from their old trees on the default image: its region held 31-71
-//     landmarks at the seeds, nearly always more than the image's 32; docs/submaps.md.)
+//     due. The local region's candidates do not bound it: the prediction keeps the kMaxCandidates
+//     nearest, and a seed beyond them waits until the robot is nearer. (Bounding the seed by the
+//     region's free candidates kept Victoria Park's maps from their old trees on the default image:
+//     its region held 31-71 landmarks at the seeds, nearly always more than the image's 32;
+//     docs/submaps.md.)
 // One function, called by SlamStep::seed on the device and in the host's process alike.
 // Bounds: O(count kMaxLandmarks), count <= kMaxSeeds.
 #pragma once
@@ -48,8 +48,9 @@ struct SeedAnswer {
 /// compatibility gate (chi-square, 2 dof); exist_nats: each seed's log-odds of existence (the
 /// policy's saturation, LandmarkPolicy confirm_nats + reserve_nats); limit: the landmarks the map may
 /// hold with its seeds (at most kMaxLandmarks - kMaxObservations).
-/// @return kOk; kInvalidInput for count out of range; kNonFinite or kNotPositiveDefinite for a seed
-///         (then nothing is seeded). No state changes unless kOk.
+/// @return kOk; kInvalidInput for count out of range, exist_nats not finite or limit over that
+///         capacity; kNonFinite or kNotPositiveDefinite for a seed (then nothing is seeded). No state
+///         changes unless kOk.
 template <typename T, class B>
 [[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T exist_nats, int limit,
                                          const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
