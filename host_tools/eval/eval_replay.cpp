@@ -44,7 +44,7 @@ struct ReplayOptions {
   double noise_inflation = 1.5;
   double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
   bool known_map = false;
-  bool write_path = false;  ///< --write-path: path.csv, each strategy's pose after every input
+  bool write_path = false;  ///< --write-path: path.csv, each strategy's pose after every input; map.csv, its final map
   RunOptions run;
   GpsOptions gps;      ///< the screening (the antenna from the log's meta)
   RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
@@ -326,13 +326,28 @@ int run_replay(const ReplayOptions& o) {
         p << strategies[k].name() << ',' << q.t_s << ',' << q.pose.x << ',' << q.pose.y << ',' << q.pose.theta << '\n';
     }
     if (!p) throw std::runtime_error("cannot write " + o.flags.out_dir + "/path.csv");
+    std::ofstream m(o.flags.out_dir + "/map.csv");  // per strategy: the final (global) map's landmarks
+    m << "strategy,x_m,y_m,sd_x_m,sd_y_m\n";
+    m.precision(10);
+    for (std::size_t k = 0; k < strategies.size(); ++k) {
+      if (!agg[k].have_first) continue;
+      const RunResult& r = agg[k].first;
+      for (std::size_t i = 0; i < r.map.size(); ++i) {
+        const auto d = static_cast<Eigen::Index>(2 * i);
+        const bool cov = r.map_cov.rows() == static_cast<Eigen::Index>(2 * r.map.size());
+        m << strategies[k].name() << ',' << r.map[i].x << ',' << r.map[i].y << ','
+          << (cov ? std::sqrt(r.map_cov(d, d)) : std::nan("")) << ','
+          << (cov ? std::sqrt(r.map_cov(d + 1, d + 1)) : std::nan("")) << '\n';
+      }
+    }
+    if (!m) throw std::runtime_error("cannot write " + o.flags.out_dir + "/map.csv");
   }
   bool any_join = false;
   for (std::size_t k = 0; k < strategies.size(); ++k)
     any_join = any_join || (agg[k].have_first && !agg[k].first.submaps.joins.empty());
   if (any_join) {  // per strategy and local map: what its join did (docs/submaps.md)
     std::ofstream j(o.flags.out_dir + "/joins.csv");
-    j << "strategy,map,t_s,landmarks,shared,offered,fused,declined,pruned,dropped,refused,joint_d2,global_landmarks,"
+    j << "strategy,map,t_s,landmarks,shared,offered,fused,declined,pruned,dropped,removed,refused,joint_d2,global_landmarks,"
          "base_x_m,base_y_m,base_theta_rad,base_sd_x_m,base_sd_y_m,base_sd_theta_rad\n";
     for (std::size_t k = 0; k < strategies.size(); ++k) {
       if (!agg[k].have_first) continue;
@@ -340,9 +355,9 @@ int run_replay(const ReplayOptions& o) {
       for (std::size_t m = 0; m < js.size(); ++m) {
         const JoinRecord& r = js[m];
         j << strategies[k].name() << ',' << m << ',' << r.t_s << ',' << r.landmarks << ',' << r.shared << ','
-          << r.offered << ',' << r.fused << ',' << r.declined << ',' << r.pruned << ',' << r.dropped << ',' << r.refused
-          << ',' << r.joint_d2 << ',' << r.global << ',' << r.base[0] << ',' << r.base[1] << ',' << r.base[2] << ','
-          << r.base_sd[0] << ',' << r.base_sd[1] << ',' << r.base_sd[2] << '\n';
+          << r.offered << ',' << r.fused << ',' << r.declined << ',' << r.pruned << ',' << r.dropped << ',' << r.removed
+          << ',' << r.refused << ',' << r.joint_d2 << ',' << r.global << ',' << r.base[0] << ',' << r.base[1] << ','
+          << r.base[2] << ',' << r.base_sd[0] << ',' << r.base_sd[1] << ',' << r.base_sd[2] << '\n';
       }
     }
     if (!j) throw std::runtime_error("cannot write " + o.flags.out_dir + "/joins.csv");
@@ -489,8 +504,8 @@ Subcommand add_replay_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 1000.0));
   rp->add_flag("--known-map", o->known_map, "localisation only: the landmark lines are the map (std 1 cm, fixed)");
   rp->add_flag("--write-path", o->write_path,
-               "path.csv: each strategy's pose estimate after every prediction and scan (with --submaps, in the "
-               "global frame)");
+               "path.csv: each strategy's pose estimate after every prediction and scan, and map.csv: its final "
+               "map's landmarks (with --submaps, the global map, in the global frame)");
   auto mrclam_rules = std::make_shared<bool>(false);
   rp->add_flag("--mrclam-rules", *mrclam_rules,
                "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "

@@ -126,7 +126,7 @@ JoinResult GlobalMap::join(const Submap& m) {
   const int n = m.landmarks();
   res.landmarks = n;
   if (m.x.size() != 3 + 2 * n || m.P.rows() != m.x.size() || m.P.cols() != m.x.size() ||
-      m.confirmed.size() != m.ids.size()) {
+      m.confirmed.size() != m.ids.size() || m.exist_nats.size() != m.ids.size()) {
     throw std::runtime_error("join: a local map whose state and covariance do not match its landmarks");
   }
   // The landmarks the map shares with the global one: carried over from the previous map, or
@@ -156,6 +156,17 @@ JoinResult GlobalMap::join(const Submap& m) {
     is_shared[static_cast<std::size_t>(i)] = true;
   }
   res.shared = static_cast<int>(shared.size());
+  // Seeds the map took and no longer holds: it removed them by their evidence (missed where they were
+  // expected, from the global map's log-odds on), so the global map removes them too.
+  std::vector<bool> gone(first_id_.size(), false);
+  for (FeatureId id : seed_ids_) {
+    if (std::find(m.ids.begin(), m.ids.end(), id) != m.ids.end()) continue;
+    const int g = global_index(id);
+    if (g >= 0 && !gone[static_cast<std::size_t>(g)]) {
+      gone[static_cast<std::size_t>(g)] = true;
+      ++res.removed;
+    }
+  }
   if (!shared.empty()) {
     const int s = static_cast<int>(shared.size());
     Eigen::VectorXd m0 = Eigen::VectorXd::Zero(2 * s);
@@ -188,6 +199,8 @@ JoinResult GlobalMap::join(const Submap& m) {
       P0(out, out) = seed_.P(from, from);
     }
     shared_update(m, shared, target, m0, P0);
+    for (std::size_t k = 0; k < shared.size(); ++k)  // it began from the global map's: its evidence is the latest
+      exist_[static_cast<std::size_t>(target[k])] = m.exist_nats[static_cast<std::size_t>(shared[k])];
   }
   // The association, in the base's frame: the map's other landmarks as range-bearing observations
   // from the base, the global landmarks (but the shared ones' targets) as predictions from it.
@@ -224,8 +237,11 @@ JoinResult GlobalMap::join(const Submap& m) {
     const Eigen::Matrix2d Ri = J * m.P.block<2, 2>(3 + 2 * i, 3 + 2 * i) * J.transpose();
     R[static_cast<std::size_t>(i)] = 0.5 * (Ri + Ri.transpose());
   }
-  std::vector<bool> is_target(static_cast<std::size_t>(N), false);
+  std::vector<bool> is_target(static_cast<std::size_t>(N), false);  // not a candidate: shared or removed
   for (int g : target) is_target[static_cast<std::size_t>(g)] = true;
+  for (int g = 0; g < N; ++g)
+    is_target[static_cast<std::size_t>(g)] =
+        is_target[static_cast<std::size_t>(g)] || gone[static_cast<std::size_t>(g)];
   std::vector<Eigen::Matrix2d> Cjj(static_cast<std::size_t>(N));
   for (int j = 0; j < N; ++j) Cjj[static_cast<std::size_t>(j)] = block_cov(j, j);
   std::vector<int> obs_of, cand_of;
@@ -255,7 +271,8 @@ JoinResult GlobalMap::join(const Submap& m) {
     obs_of.resize(JoinBounds::kMaxObservations);
   if (cand_of.size() > static_cast<std::size_t>(JoinBounds::kMaxCandidates)) cand_of.resize(JoinBounds::kMaxCandidates);
   res.offered = static_cast<int>(obs_of.size());
-  std::vector<std::pair<int, int>> pairs;  // (local landmark, global landmark)
+  std::vector<std::pair<int, int>> pairs;                           // (local landmark, global landmark)
+  std::vector<bool> ambiguous(static_cast<std::size_t>(n), false);  // declined: neither paired nor new
   bool compatible = true;
   if (!obs_of.empty() && !cand_of.empty()) {
     Association& a = *assoc_;
@@ -282,7 +299,10 @@ JoinResult GlobalMap::join(const Submap& m) {
     for (int k = 0; k < a.out.count; ++k) {
       const FeatureId f = a.out.feature[static_cast<std::size_t>(k)];
       if (f >= 0) pairs.emplace_back(obs_of[static_cast<std::size_t>(k)], static_cast<int>(f));
-      res.declined += f == kUnmatched;
+      if (f == kUnmatched) {
+        ++res.declined;
+        ambiguous[static_cast<std::size_t>(obs_of[static_cast<std::size_t>(k)])] = true;
+      }
     }
     compatible = a.out.jointly_compatible;
   }
@@ -377,6 +397,8 @@ JoinResult GlobalMap::join(const Submap& m) {
       for (int q : in) {
         const auto& pr = pairs[static_cast<std::size_t>(q)];
         drop[static_cast<std::size_t>(pr.first)] = true;
+        exist_[static_cast<std::size_t>(pr.second)] +=
+            m.exist_nats[static_cast<std::size_t>(pr.first)];  // two maps' evidence
         const FeatureId first = first_id_[static_cast<std::size_t>(pr.second)];
         res.pairs.emplace_back(m.ids[static_cast<std::size_t>(pr.first)], first);
         global_of_[m.ids[static_cast<std::size_t>(pr.first)]] = first;
@@ -386,18 +408,32 @@ JoinResult GlobalMap::join(const Submap& m) {
   }
   // The new state [end, G, the new landmarks]: the old base and the fused duplicates marginalised.
   std::vector<int> keep = {D0, D0 + 1, D0 + 2};
-  for (int r = 3; r < D0; ++r) keep.push_back(r);
+  std::vector<FeatureId> first_ids;
+  std::vector<double> exist;
+  for (int g = 0; g < N; ++g) {
+    if (gone[static_cast<std::size_t>(g)]) continue;
+    keep.push_back(3 + 2 * g);
+    keep.push_back(4 + 2 * g);
+    first_ids.push_back(first_id_[static_cast<std::size_t>(g)]);
+    exist.push_back(exist_[static_cast<std::size_t>(g)]);
+  }
   for (int i = 0; i < n; ++i) {
     if (is_shared[static_cast<std::size_t>(i)] || drop[static_cast<std::size_t>(i)]) continue;
-    if (!m.confirmed[static_cast<std::size_t>(i)]) {  // tentative and not fused: not evidence enough
+    // Tentative and not fused: not evidence enough. Declined (compatible with global landmarks,
+    // left out as ambiguous): as the step does with such an observation, neither paired nor mapped
+    // anew (kUnmatched), so a re-observed landmark is not made again beside its rivals.
+    if (!m.confirmed[static_cast<std::size_t>(i)] || ambiguous[static_cast<std::size_t>(i)]) {
       ++res.dropped;
       continue;
     }
     keep.push_back(row_of[static_cast<std::size_t>(i)]);
     keep.push_back(row_of[static_cast<std::size_t>(i)] + 1);
-    first_id_.push_back(m.ids[static_cast<std::size_t>(i)]);
+    first_ids.push_back(m.ids[static_cast<std::size_t>(i)]);
+    exist.push_back(m.exist_nats[static_cast<std::size_t>(i)]);
     global_of_[m.ids[static_cast<std::size_t>(i)]] = m.ids[static_cast<std::size_t>(i)];
   }
+  first_id_ = std::move(first_ids);
+  exist_ = std::move(exist);
   x_ = X(keep);
   x_(2) = wrap_angle(x_(2));
   P_ = P(keep, keep);
@@ -555,6 +591,7 @@ Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_cou
     if (skip) continue;
     given.push_back(a);
     s.first_ids.push_back(first_id_[static_cast<std::size_t>(near[a].second)]);
+    s.exist_nats.push_back(exist_[static_cast<std::size_t>(near[a].second)]);
   }
   const auto k = static_cast<Eigen::Index>(given.size());
   s.x = Eigen::VectorXd::Zero(2 * k);
@@ -567,12 +604,14 @@ Seed GlobalMap::seed(const Eigen::Vector2d& center, double radius_m, int max_cou
 }
 
 void GlobalMap::seeded(const Seed& s, const std::vector<FeatureId>& local_ids) {
-  if (local_ids.size() != s.first_ids.size()) throw std::runtime_error("seeded: one answer per seed");
+  if (local_ids.size() != s.first_ids.size() || s.exist_nats.size() != s.first_ids.size())
+    throw std::runtime_error("seeded: one answer per seed");
   std::vector<Eigen::Index> took;
   for (std::size_t k = 0; k < local_ids.size(); ++k) {
     if (local_ids[k] >= 0) {
       took.push_back(static_cast<Eigen::Index>(k));
       seed_.first_ids.push_back(s.first_ids[k]);
+      seed_.exist_nats.push_back(s.exist_nats[k]);
       seed_ids_.push_back(local_ids[k]);
       global_of_[local_ids[k]] = s.first_ids[k];
     } else if (local_ids[k] == kUnmatched) {

@@ -16,6 +16,7 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   submaps.offered += m.offered;
   submaps.fused += m.fused;
   submaps.declined += m.declined;
+  submaps.removed += m.removed;
   submaps.refused += m.refused;
   submaps.wrong += m.wrong;
   submaps.seeded += m.seeded;

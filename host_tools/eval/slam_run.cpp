@@ -85,6 +85,7 @@ void SlamSession::State::seed_region() {
   for (int k = 0; k < count; ++k) {
     in[k].l = seed.x.segment<2>(2 * k);
     in[k].P = seed.P.block<2, 2>(2 * k, 2 * k);
+    in[k].exist_nats = seed.exist_nats[static_cast<std::size_t>(k)];
   }
   check(step.seed(in, count, out), "seed");
   std::vector<FeatureId> ids(static_cast<std::size_t>(count));
@@ -112,6 +113,7 @@ void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& glo
   st.offered += joined.offered;
   st.fused += joined.fused;
   st.declined += joined.declined;
+  st.removed += joined.removed;
   st.refused += joined.refused;
   auto truth = [&](FeatureId id) {
     const auto k = static_cast<std::size_t>(id);

@@ -170,6 +170,7 @@ Submap submap_from_wire(const LinkClient::WireSubmap& w, int index) {
     m.x.segment<2>(3 + 2 * j) << l.x_m, l.y_m;
     m.ids.push_back(l.id);
     m.confirmed.push_back(l.confirmed);
+    m.exist_nats.push_back(l.exist_nats);
   }
   m.P.resize(d, d);
   for (int c = 0; c < d; ++c) {
@@ -276,8 +277,12 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     m.count = static_cast<std::uint8_t>(seed.first_ids.size());
     for (std::size_t k = 0; k < m.count; ++k) {
       const auto q = 2 * static_cast<Eigen::Index>(k);
-      m.items[k] = {static_cast<float>(seed.x(q)), static_cast<float>(seed.x(q + 1)), static_cast<float>(seed.P(q, q)),
-                    static_cast<float>(seed.P(q, q + 1)), static_cast<float>(seed.P(q + 1, q + 1))};
+      m.items[k] = {static_cast<float>(seed.x(q)),
+                    static_cast<float>(seed.x(q + 1)),
+                    static_cast<float>(seed.P(q, q)),
+                    static_cast<float>(seed.P(q, q + 1)),
+                    static_cast<float>(seed.P(q + 1, q + 1)),
+                    static_cast<float>(seed.exist_nats[k])};
     }
     link.send_seed(m);
     const LinkAssocResult a = link.receive_seed(m.batch_id);

@@ -716,9 +716,9 @@ TEST_CASE(
   m.batch_id = 1000;
   m.map_id = 0;
   m.count = 3;
-  m.items[0] = {1.0f, 8.0f, 0.04f, 0.01f, 0.09f};                           // a new place
-  m.items[1] = {s.landmark(0).x(), s.landmark(0).y(), 0.04f, 0.0f, 0.04f};  // where landmark 0 is
-  m.items[2] = {-3.0f, -6.0f, 0.25f, 0.0f, 0.25f};                          // another new place
+  m.items[0] = {1.0f, 8.0f, 0.04f, 0.01f, 0.09f, 12.5f};                           // a new place
+  m.items[1] = {s.landmark(0).x(), s.landmark(0).y(), 0.04f, 0.0f, 0.04f, 12.5f};  // where landmark 0 is
+  m.items[2] = {-3.0f, -6.0f, 0.25f, 0.0f, 0.25f, 1e30f};                          // another new place
   h.out.clear();
   const std::vector<std::uint8_t> frame = h.frame(m, h.seq++);
   h.send_bytes(frame);
@@ -740,8 +740,9 @@ TEST_CASE(
   const int j = s.index_of(next);
   REQUIRE(j >= 0);
   CHECK(s.confirmed(j));
-  const ekf::LandmarkPolicy policy;  // the evidence it banked where it was made: the policy's saturation
-  CHECK(s.existence(j) == policy.confirm_nats + policy.reserve_nats);
+  CHECK(s.existence(j) == 12.5f);    // the evidence the global map banked for it
+  const ekf::LandmarkPolicy policy;  // ... at most the policy's saturation
+  CHECK(s.existence(s.index_of(next + 1)) == policy.confirm_nats + policy.reserve_nats);
   CHECK(s.landmark(j).x() == 1.0f);
   CHECK(s.landmark(j).y() == 8.0f);
   const int row = ekf::Layout::landmark(j);

@@ -489,6 +489,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             w.p00 = 0.01f * static_cast<float>(in.u8());
             w.p01 = 0.001f * static_cast<float>(static_cast<std::int8_t>(in.u8()));
             w.p11 = 0.01f * static_cast<float>(in.u8());
+            w.exist_nats = static_cast<float>(static_cast<std::int8_t>(in.u8()));
           }
           if (m.validate() == proto::Error::kOk) s.send(m);
           break;

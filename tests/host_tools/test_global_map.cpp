@@ -22,6 +22,7 @@ Submap make_map(int index, const Eigen::Vector3d& end, const std::vector<Eigen::
   m.index = index;
   m.ids = ids;
   m.confirmed.assign(ids.size(), true);
+  m.exist_nats.assign(ids.size(), 10.0);
   const int n = static_cast<int>(l.size());
   m.x.resize(3 + 2 * n);
   m.x.head<3>() = end;
@@ -162,4 +163,46 @@ TEST_CASE("global map: a seed is the region's landmarks the local map does not h
   CHECK(g.landmarks() == 5);
   CHECK((g.landmark(0) - l0).norm() < 1e-9);
   CHECK((g.landmark(1) - l1).norm() < 1e-9);
+}
+
+TEST_CASE(
+    "global map: landmarks exist by evidence; a seed carries the global log-odds, a seed the map removed leaves, "
+    "an ambiguous landmark is neither fused nor added, a fused one sums two maps' evidence") {
+  GlobalMap g(JoinOptions{});
+  // Map 0 ends at (10, 0, 0): two landmarks near the robot and two 0.1 m apart (ambiguous).
+  Submap m0 = make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}, {18, 5}, {18.1, 5}}, {0, 1, 2, 3}, 0.04);
+  m0.exist_nats = {7.0, 30.0, 12.0, 12.0};
+  g.join(m0);
+  REQUIRE(g.landmarks() == 4);
+  CHECK(g.existence(0) == 7.0);
+  CHECK(g.existence(1) == 30.0);
+  const Seed s = g.seed(Eigen::Vector2d(10, 0), 20, 10, {});
+  REQUIRE(s.first_ids == std::vector<FeatureId>{0, 1});
+  CHECK(s.exist_nats == std::vector<double>{7.0, 30.0});  // as SUBMAP_SEED carries them
+  g.seeded(s, {100, 101});
+  // Map 1 removed seed 100 by its evidence (missed where it was expected) and kept 101 with less;
+  // it made one landmark between the two close ones (either could be it) and one at global 1's
+  // place... which it holds already as 101, so a new one near (25, 0) instead, paired with nothing.
+  Submap m1 = make_map(1, {0, 0, 0}, {s.x.segment<2>(2), {8.05, 5}, {15, 0}}, {101, 102, 103}, 0.01);
+  m1.P.block<2, 2>(3, 3) = s.P.block<2, 2>(2, 2);
+  m1.exist_nats = {25.0, 9.0, 6.0};
+  const JoinResult j = g.join(m1);
+  CHECK(j.shared == 1);
+  CHECK(j.removed == 1);
+  CHECK(j.declined == 1);  // 102: within the gates of both close landmarks
+  CHECK(j.fused == 0);
+  CHECK(j.dropped == 1);
+  REQUIRE(g.landmarks() == 4);  // 0 removed; 1, 2, 3 kept; 103 new; 102 left out
+  CHECK(g.first_id(0) == 1);
+  CHECK(g.existence(0) == 25.0);  // the last map's: it began from the global one
+  CHECK(g.first_id(3) == 103);
+  CHECK(g.existence(3) == 6.0);
+  CHECK((g.landmark(3) - Eigen::Vector2d(25, 0)).norm() < 1e-6);
+  // Map 2 makes 103 anew (a new id, not seeded): the join fuses it, and the evidence of both adds up.
+  Submap m2 = make_map(2, {0, 0, 0}, {{15, 0}}, {200}, 0.01);
+  m2.exist_nats = {5.5};
+  const JoinResult k = g.join(m2);
+  CHECK(k.fused == 1);
+  REQUIRE(g.landmarks() == 4);
+  CHECK(g.existence(3) == doctest::Approx(11.5));
 }

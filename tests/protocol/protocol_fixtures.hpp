@@ -207,7 +207,7 @@ inline Submap sample<Submap>() {  // chunk 1 of a 20-landmark map: landmarks 16.
   m.y_m = -3.25f;
   m.theta_rad = 0.75f;
   m.count = 4;
-  for (std::uint8_t k = 0; k < m.count; ++k) m.items[k] = {40 + k, 1.0f + k, -2.0f * k, k % 2 == 0};
+  for (std::uint8_t k = 0; k < m.count; ++k) m.items[k] = {40 + k, 1.0f + k, -2.0f * k, k % 2 == 0, 4.5f * k};
   return m;
 }
 template <>
@@ -235,6 +235,7 @@ inline SubmapSeed submap_seed(int count, std::uint32_t id = 78) {
     w.p00 = 0.25f + 0.01f * static_cast<float>(k);
     w.p01 = 0.02f;
     w.p11 = 0.5f;
+    w.exist_nats = 20.0f + static_cast<float>(k);
   }
   return s;
 }

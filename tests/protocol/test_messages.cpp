@@ -390,10 +390,13 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     s.items[1].p11 = 0.5f;
     s.items[1].x_m = std::numeric_limits<float>::infinity();
     rejects(s, Error::kNonFinite);
+    s.items[1].x_m = 1.0f;
+    s.items[1].exist_nats = std::numeric_limits<float>::quiet_NaN();  // the global map's log-odds
+    rejects(s, Error::kNonFinite);
     s = submap_seed(static_cast<int>(kSeedsPerFrame));
     s.count = static_cast<std::uint8_t>(kSeedsPerFrame + 1);
     rejects(s, Error::kCapacityExceeded);
-    CHECK(payload_of(submap_seed(static_cast<int>(kSeedsPerFrame))).size() == 9 + 8 * 20);
+    CHECK(payload_of(submap_seed(static_cast<int>(kSeedsPerFrame))).size() == 9 + 8 * 24);
   }
   SUBCASE("OBS_BATCH") {
     ObsBatch b = obs_batch(3);

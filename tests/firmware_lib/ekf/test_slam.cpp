@@ -170,6 +170,44 @@ TEST_CASE_TEMPLATE("predict_local: C equals an explicit dense H P H^T; the regio
   for (int a = 0; a < f->pred.count; ++a) CHECK(f->pred.h[a].x() < T(3));
 }
 
+TEST_CASE_TEMPLATE(
+    "predict_local: a region over the candidates keeps those the sensor can see; behind ones make room first", T, float,
+    double) {
+  using CB = Bounds<5, 4, 5, 1000, 21>;  // 4 candidates
+  auto s = std::make_unique<Slam<T, CB>>();
+  auto ws = std::make_unique<SlamWorkspace<T, CB>>();
+  auto pred = std::make_unique<Prediction<T, CB>>();
+  REQUIRE(s->reset(Pose2<T>{0, 0, 0}, Mat3<T>::Identity() * T(1e-4)) == Status::kOk);
+  // Facing +x: three behind (nearest), one abeam, four ahead.
+  const T pts[8][2] = {{-2, 0}, {-2, 1}, {-2, -1}, {0, 3}, {5, 0}, {5, 2}, {6, -1}, {7, 0}};
+  FeatureId id[8];
+  for (int k = 0; k < 8; ++k)
+    REQUIRE(s->add_known_landmark(Vec2<T>(pts[k][0], pts[k][1]), Mat2<T>::Identity() * T(0.01), id[k]) == Status::kOk);
+  LocalMapStats st;
+  auto ids = [&]() {
+    std::vector<FeatureId> v;
+    for (int a = 0; a < pred->count; ++a) v.push_back(pred->id[a]);
+    return v;
+  };
+  // A sensor that sees all round (the default): the nearest four.
+  REQUIRE(s->predict_local(T(30), *ws, *pred, st) == Status::kOk);
+  CHECK(st.truncated);
+  CHECK(ids() == std::vector<FeatureId>{id[0], id[1], id[2], id[3]});
+  // A 180-degree sensor: a landmark nearer the back than the edge of view (|bearing| > 135 deg) makes
+  // room for the nearest in view; the kept ones nearest first.
+  REQUIRE(s->predict_local(T(30), *ws, *pred, st, false, T(kPi<double> / 2)) == Status::kOk);
+  CHECK(ids() == std::vector<FeatureId>{id[3], id[4], id[5], id[6]});
+  // Not over the candidates: every landmark of the region, nearest first, behind ones included.
+  REQUIRE(s->predict_local(T(4), *ws, *pred, st, false, T(kPi<double> / 2)) == Status::kOk);
+  CHECK(!st.truncated);
+  CHECK(ids() == std::vector<FeatureId>{id[0], id[1], id[2], id[3]});
+  CHECK(pred->h[0].x() == doctest::Approx(2.0));
+  // A half field of view outside (0, pi] is refused.
+  CHECK(s->predict_local(T(30), *ws, *pred, st, false, T(0)) == Status::kInvalidInput);
+  CHECK(s->predict_local(T(30), *ws, *pred, st, false, T(4)) == Status::kInvalidInput);
+  CHECK(s->predict_local(T(30), *ws, *pred, st, false, std::numeric_limits<T>::quiet_NaN()) == Status::kInvalidInput);
+}
+
 TEST_CASE_TEMPLATE("a noise-free run stays on the truth; P stays symmetric", T, float, double) {
   auto f = std::make_unique<Fixture<T>>();
   const RunResult r = run(*f, ring(24, 6.0), 260, 0.0, 1);  // more than one lap: loop closure

@@ -183,7 +183,8 @@ TEST_CASE("closing rule: a map is due after its landmarks (once it has added one
 }
 
 TEST_CASE(
-    "seed: room is the capacity less one scan, not the region's candidates; a seed banks the policy's existence") {
+    "seed: room is the capacity less one scan, not the region's candidates; a seed banks the global map's "
+    "existence, capped at the policy's saturation") {
   using B = Bounds<5, 6, 5, 1000, 21>;  // 6 candidates, 21 landmarks: room for 21 - 5 = 16 seeds
   auto s = std::make_unique<node::SlamStep<double, B>>();
   node::StepSettings<double> st;
@@ -198,6 +199,7 @@ TEST_CASE(
       const double a = 0.39 * (8 * call + k);
       in[k].l = Vec2<double>(3 + 0.5 * call, 0) + 2.0 * Vec2<double>(std::cos(a), std::sin(a)) * (1 + call);
       in[k].P = Mat2<double>::Identity() * 0.01;
+      in[k].exist_nats = k == 0 ? 1e6 : 10.0 + k;  // the first over the saturation
     }
     return s->seed(in, node::kMaxSeeds, out);
   };
@@ -206,8 +208,10 @@ TEST_CASE(
   CHECK(s->slam().landmarks() == 16);  // more than the region's 6 candidates: the nearest are predicted
   for (int k = 0; k < node::kMaxSeeds; ++k) CHECK(out[k].outcome == node::Outcome::kNewLandmark);
   const ekf::LandmarkPolicy policy;
-  for (int j = 0; j < 16; ++j)
-    CHECK(s->slam().existence(j) == doctest::Approx(policy.confirm_nats + policy.reserve_nats));
+  for (int j = 0; j < 16; ++j) {  // as given, the first of each call capped
+    const int k = j % node::kMaxSeeds;
+    CHECK(s->slam().existence(j) == doctest::Approx(k == 0 ? policy.confirm_nats + policy.reserve_nats : 10.0 + k));
+  }
   REQUIRE(seed_ring(2) == Status::kOk);  // no room left for a scan's new landmarks
   CHECK(s->slam().landmarks() == 16);
   for (int k = 0; k < node::kMaxSeeds; ++k) {
@@ -227,6 +231,10 @@ TEST_CASE(
   auto slam = std::make_unique<Slam<double, B>>();
   REQUIRE(slam->reset(Pose2<double>{0, 0, 0}, Mat3<double>::Identity() * 1e-4) == Status::kOk);
   CHECK(node::seed_map(*slam, 9.2, std::nan(""), 16, in, 1, out) == Status::kInvalidInput);
+  const double exist = in[0].exist_nats;
+  in[0].exist_nats = std::nan("");  // a seed's existence not finite: no seed taken
+  CHECK(node::seed_map(*slam, 9.2, 100.0, 16, in, 1, out) == Status::kNonFinite);
+  in[0].exist_nats = exist;
   CHECK(node::seed_map(*slam, 9.2, 100.0, 17, in, 1, out) == Status::kInvalidInput);  // over 21 - 5
   CHECK(node::seed_map(*slam, 9.2, 100.0, 16, in, node::kMaxSeeds + 1, out) == Status::kInvalidInput);
   CHECK(slam->landmarks() == 0);

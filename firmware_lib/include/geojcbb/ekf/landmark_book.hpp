@@ -14,6 +14,7 @@
 #include <cstdint>
 
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/settings.hpp"
 
@@ -81,8 +82,8 @@ struct ExistenceEvidence {
   T log_miss;    ///< log(1 - p_D)
   T area_coeff;  ///< clutter_density pi gate_d2: p_FA = area_coeff sqrt(r^2 |S|)
   explicit ExistenceEvidence(const LandmarkPolicy& p)
-      : log_pd(std::log(T(p.p_detect))),
-        log_miss(std::log(T(1) - T(p.p_detect))),
+      : log_pd(fmath::log(T(p.p_detect))),
+        log_miss(fmath::log(T(1) - T(p.p_detect))),
         area_coeff(T(p.clutter_density) * kPi<T> * T(p.gate_d2)) {}
   /// p_FA for a gate of |S| (range, bearing) at range r (r2_det = r^2 |S|), within [1e-9, 0.5]: a
   /// gate half full of clutter makes a detection little evidence, and never evidence against.
@@ -90,8 +91,8 @@ struct ExistenceEvidence {
     const T p = area_coeff * std::sqrt(std::max(r2_det, T(0)));
     return p > T(0.5) ? T(0.5) : (p > T(1e-9) ? p : T(1e-9));
   }
-  T hit(T pfa) const { return log_pd - std::log(pfa); }
-  T miss(T pfa) const { return log_miss - std::log(T(1) - pfa); }
+  T hit(T pfa) const { return log_pd - fmath::log(pfa); }
+  T miss(T pfa) const { return log_miss - fmath::log(T(1) - pfa); }
 };
 
 /// What one review did.

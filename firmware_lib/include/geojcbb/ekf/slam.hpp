@@ -42,6 +42,7 @@
 #include <limits>
 
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/ekf/landmark_book.hpp"
 #include "geojcbb/ekf/motion.hpp"
@@ -405,10 +406,16 @@ class Slam {
   /// measurements h and C = H P H^T. With `confirmed_first`, the confirmed landmarks
   /// come first (each part nearest first): the first `stats.confirmed` candidates are a prediction
   /// of their own (C's leading blocks), the ones after them tentative.
-  /// @return kOk; kInvalidInput for a radius that is not positive and finite.
+  /// When the region holds more than MaxCandidates, those behind the sensor make room first: a
+  /// landmark whose bearing is nearer the back than the edge of the field of view (|bearing| >
+  /// (half_fov_rad + pi) / 2; none when half_fov_rad is pi) cannot be observed, and a tree in view
+  /// left out of the candidates would be mapped again. The kept ones are then nearest first.
+  /// @return kOk; kInvalidInput for a radius that is not positive and finite, or a half field of
+  /// view outside (0, pi].
   [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out, LocalMapStats& stats,
-                                     bool confirmed_first = false) const {
+                                     bool confirmed_first = false, T half_fov_rad = kPi<T>) const {
     if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
+    if (!(half_fov_rad > T(0) && half_fov_rad <= kPi<T>)) return Status::kInvalidInput;
     auto& idx = ws.cand;
     auto& rng = ws.cand_range;
     auto& Hp = ws.cand_Hp;
@@ -416,9 +423,15 @@ class Slam {
     int n = 0;
     stats = LocalMapStats{};
     const Pose2<T> xr = pose();
+    // Behind: cos(bearing) < cos((half_fov + pi) / 2) = -sin(half_fov / 2); ranked after every
+    // landmark in view (its range + radius_m).
+    const T back_cos = -fmath::sin(half_fov_rad / T(2));
+    const Vec2<T> ahead(fmath::cos(xr.theta), fmath::sin(xr.theta));
     for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks; insertion keeps the nearest kMaxCandidates
-      const T r = (landmark(j) - Vec2<T>(xr.x, xr.y)).norm();
-      if (!(r < radius_m) || !(r > T(0))) continue;
+      const Vec2<T> d = landmark(j) - Vec2<T>(xr.x, xr.y);
+      const T dist = d.norm();
+      if (!(dist < radius_m) || !(dist > T(0))) continue;
+      const T r = d.dot(ahead) < back_cos * dist ? dist + radius_m : dist;
       ++stats.in_region;
       int k = n;
       if (n < B::kMaxCandidates) {
@@ -434,6 +447,20 @@ class Slam {
       }
       rng[k] = r;
       idx[k] = static_cast<std::uint16_t>(j);
+    }
+    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates: the kept ones by range (behind ones in place)
+      if (rng[a] >= radius_m) rng[a] -= radius_m;
+    }
+    for (int a = 1; a < n; ++a) {  // <= kMaxCandidates, insertion sort: O(kMaxCandidates^2)
+      const T r = rng[a];
+      const std::uint16_t i = idx[a];
+      int k = a;
+      for (; k > 0 && rng[k - 1] > r; --k) {  // <= kMaxCandidates
+        rng[k] = rng[k - 1];
+        idx[k] = idx[k - 1];
+      }
+      rng[k] = r;
+      idx[k] = i;
     }
     stats.confirmed = n;
     if (confirmed_first) {  // stable partition, the confirmed first
@@ -746,8 +773,8 @@ class Slam {
   /// A landmark of the global map given to this local map (docs/submaps.md, "Seed"; node::seed_map):
   /// at l in this map's frame with covariance Pll, uncorrelated with the pose and with every other
   /// landmark (the seeds' prior is block-diagonal, as SUBMAP_SEED carries it). It starts confirmed,
-  /// with `exist_nats` of existence (the caller's policy's saturation: its evidence was banked in the
-  /// maps that made it, which this one cannot see, so a few misses here do not remove it).
+  /// with `exist_nats` of existence (the evidence the global map banked for it in the maps that made
+  /// it, which this one cannot see, capped by the caller at its policy's saturation).
   /// @param[out] id  the new landmark's id
   /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll (checked as augment() does);
   ///         kCapacityExceeded. No state changes unless kOk.  O(n)

@@ -293,6 +293,12 @@ class Node {
     return e;
   }
 
+  /// SUBMAP_SEED decoded out of line: its 204 B stay out of handle()'s frame, which is on the
+  /// deepest call chain (the lost scan's alignment; docs/firmware.md, "Stack").
+  [[gnu::noinline, gnu::cold]] proto::Error serve_seed(const proto::FrameView& f) {
+    return serve<proto::SubmapSeed>(f);
+  }
+
   void handle(const proto::FrameView& f) {
     rx_type_ = f.type;
     rx_seq_ = f.seq;
@@ -316,7 +322,7 @@ class Node {
         break;
       case proto::MsgType::kSubmapSeed:  // the local maps' seed, with the hand-over
         if constexpr (OptionalStages<B>::kHandOver) {
-          e = serve<proto::SubmapSeed>(f);
+          e = serve_seed(f);
         } else {
           e = proto::Error::kUnknownType;
         }
@@ -499,7 +505,8 @@ class Node {
     }
   }
 
-  /// Out of line and cold: its seeds and answers (288 B) stay out of handle()'s frame.
+  /// Out of line and cold: its seeds (224 B) stay out of handle()'s frame; the answers are a member
+  /// (96 B), which keeps this frame within the 512-B limit (docs/firmware.md).
   [[gnu::cold, gnu::noinline]] void on_message(const proto::SubmapSeed& m) {
     if (!running()) return;
     if (!fresh()) {  // retransmitted: seeded once; its answer again while it is the last one
@@ -512,11 +519,12 @@ class Node {
       return;
     }
     MapSeed<T> seeds[kMaxSeeds];
-    SeedAnswer<T> answers[kMaxSeeds];
+    SeedAnswer<T>* answers = seed_answers_;
     for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
       const proto::SeedWire& w = m.items[static_cast<std::size_t>(k)];
       seeds[k].l << T(w.x_m), T(w.y_m);
       seeds[k].P << T(w.p00), T(w.p01), T(w.p01), T(w.p11);
+      seeds[k].exist_nats = T(w.exist_nats);
     }
     if (step_.seed(seeds, m.count, answers) != Status::kOk) {
       invalid();
@@ -602,6 +610,7 @@ class Node {
         w.x_m = static_cast<float>(l.x());
         w.y_m = static_cast<float>(l.y());
         w.confirmed = s.confirmed(j);
+        w.exist_nats = static_cast<float>(s.existence(j));
       }
       send_out_of_line(m);
     }
@@ -719,9 +728,10 @@ class Node {
   ObsBatch rx_batch_;
   static constexpr StepSettings<T> kDefaultSettings{};
   proto::Config rx_config_;
-  StepSettings<T> settings_;  ///< CONFIG's settings, built here rather than on the stack
-  AssocResult result_;        ///< the last batch's, kept for a retransmitted OBS_BATCH
-  proto::Pose pose_;          ///< likewise
+  StepSettings<T> settings_;               ///< CONFIG's settings, built here rather than on the stack
+  AssocResult result_;                     ///< the last batch's, kept for a retransmitted OBS_BATCH
+  SeedAnswer<T> seed_answers_[kMaxSeeds];  ///< SUBMAP_SEED's answers, before they go into result_
+  proto::Pose pose_;                       ///< likewise
   proto::Decoder decoder_;
   proto::MessageCounters msg_counters_;
   proto::EncodedFrame frame_;

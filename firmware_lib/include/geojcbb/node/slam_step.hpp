@@ -137,9 +137,10 @@ class SlamStep {
     if (st == Status::kOk) begin_map();
     return st;
   }
-  /// Landmarks of the global map seeded into the local map (stages/map_seed.hpp: each added unless
-  /// one the map holds is compatible with it or there is no room: the closing size or the capacity
-  /// less one scan). @return the statuses of seed_map; kInvalidInput when not configured.
+  /// Landmarks of the global map seeded into the local map (stages/map_seed.hpp: each added, with its
+  /// existence capped at the policy's saturation, unless one the map holds is compatible with it or
+  /// there is no room: the closing size or the capacity less one scan). @return the statuses of
+  /// seed_map; kInvalidInput when not configured.
   [[nodiscard]] Status seed(const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
     if (!configured_) return Status::kInvalidInput;
     int limit = B::kMaxLandmarks - B::kMaxObservations;
@@ -211,7 +212,7 @@ class SlamStep {
       return Status::kOk;
     }
     ekf::LocalMapStats local;
-    st = slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local, cfg_.tentative_isolated);
+    st = slam_.predict_local(cfg_.local_radius_m, ekf_ws_, pred_, local, cfg_.tentative_isolated, view_.half_fov_rad);
     if (st != Status::kOk) return st;
     const int confirmed = local.confirmed;
     const std::uint32_t t1 = clock ? clock() : 0;

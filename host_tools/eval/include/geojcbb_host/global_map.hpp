@@ -40,6 +40,10 @@ struct Submap {
   /// Per landmark: confirmed by its evidence (ekf::LandmarkPolicy). A tentative one joins the global
   /// map only when it is paired with a global landmark; otherwise it is dropped (marginalised).
   std::vector<bool> confirmed;
+  /// Per landmark: its log-odds of existence at the hand-over (ekf::LandmarkPolicy). The global map
+  /// keeps it: a seed starts from it, and a seed the map took and removed by its evidence (missed
+  /// where it was expected) leaves the global map.
+  std::vector<double> exist_nats;
   Eigen::VectorXd x;  ///< [x_r, y_r, theta_r, l_1x, l_1y, ...], 3 + 2 ids.size()
   Eigen::MatrixXd P;  ///< its covariance
   int landmarks() const { return static_cast<int>(ids.size()); }
@@ -60,6 +64,7 @@ Submap submap_of(const ekf::Slam<T, B>& slam, int index) {
   for (int j = 0; j < slam.landmarks(); ++j) {
     m.ids.push_back(slam.id(j));
     m.confirmed.push_back(slam.confirmed(j));
+    m.exist_nats.push_back(static_cast<double>(slam.existence(j)));
   }
   return m;
 }
@@ -88,6 +93,7 @@ struct Seed {
   std::vector<FeatureId> first_ids;  ///< the global landmarks (their first ids)
   Eigen::VectorXd x;                 ///< 2 per landmark
   Eigen::MatrixXd P;
+  std::vector<double> exist_nats;  ///< per landmark: the global map's log-odds of its existence
 };
 
 class GlobalMap {
@@ -121,6 +127,9 @@ class GlobalMap {
   int landmarks() const { return static_cast<int>(first_id_.size()); }
   Eigen::Vector2d landmark(int k) const { return x_.segment<2>(3 + 2 * k); }
   Eigen::Matrix2d landmark_covariance(int k) const { return P_.block<2, 2>(3 + 2 * k, 3 + 2 * k); }
+  /// Global landmark k's log-odds of existence: the last local map's that held it (which began from
+  /// the global map's, carried or seeded), or the sum of two maps' that each made it (fused).
+  double existence(int k) const { return exist_[static_cast<std::size_t>(k)]; }
   /// The id of the local landmark global landmark k was made from (its first).
   FeatureId first_id(int k) const { return first_id_[static_cast<std::size_t>(k)]; }
   /// Local maps joined so far.
@@ -147,6 +156,7 @@ class GlobalMap {
   Eigen::VectorXd x_;  ///< [base pose (3), landmarks (2 each)]
   Eigen::MatrixXd P_;
   std::vector<FeatureId> first_id_;
+  std::vector<double> exist_;  ///< per landmark: its log-odds of existence
   int maps_ = 0;
   std::unique_ptr<Submap> prev_;                        ///< the last map joined: the next one's prior
   Seed seed_;                                           ///< the current map's seeds, stacked

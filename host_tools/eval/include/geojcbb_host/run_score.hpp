@@ -68,9 +68,10 @@ struct JoinCounts {
   int shared = 0;        ///< carried over from the previous map or seeded (the same ids): joined by their ids
   int offered = 0;       ///< of the others, with a compatible global landmark (the association's observations)
   int fused = 0;         ///< paired with a global landmark and fused
-  int declined = 0;      ///< ambiguous: kept apart
+  int declined = 0;      ///< ambiguous: neither paired nor mapped anew (left out, as kUnmatched)
   int pruned = 0;        ///< outside the jointly compatible subset (JoinOptions::joint_check): kept apart
-  int dropped = 0;       ///< tentative and not paired: left out
+  int dropped = 0;       ///< tentative and not paired, or declined: left out
+  int removed = 0;       ///< seeds the map took and removed by their evidence: gone from the global map
   bool refused = false;  ///< the pairs were not jointly compatible: all kept apart
   double joint_d2 = 0;   ///< of the pairs' constraints, with the full covariance
 };
@@ -88,7 +89,8 @@ struct SubmapStats {
   int maps = 0;                   ///< local maps joined
   int offered = 0;                ///< their landmarks with a compatible global one
   int fused = 0;                  ///< landmarks fused with a global one
-  int declined = 0;               ///< ambiguous pairings kept apart
+  int declined = 0;               ///< ambiguous pairings left out
+  int removed = 0;                ///< global landmarks removed by a local map's evidence (seeds it removed)
   int refused = 0;                ///< joins refused (their pairs not jointly compatible)
   int wrong = 0;                  ///< fused pairs of two different true landmarks (labelled data)
   int seeded = 0;                 ///< global landmarks the local maps took as seeds (--submap-seed)

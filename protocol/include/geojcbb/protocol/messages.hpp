@@ -618,7 +618,7 @@ struct Pose : Codec<Pose> {
 
 /// Landmarks per SUBMAP frame, and covariance entries per SUBMAP_COV frame: each message's struct
 /// (the device builds one at a time on its stack) stays within the 512-byte frame limit of the
-/// firmware's stack check (docs/firmware.md), 284 and 400 bytes.
+/// firmware's stack check (docs/firmware.md), 348 and 400 bytes.
 constexpr std::size_t kSubmapLandmarksPerFrame = 16;
 constexpr std::size_t kSubmapCovPerFrame = 96;
 
@@ -642,13 +642,16 @@ struct SubmapLandmarkWire {
   std::int32_t id = 0;  ///< the landmark's id (ids go on across maps; a carried landmark keeps its id)
   float x_m = 0.0f;     ///< in the map's frame
   float y_m = 0.0f;
-  bool confirmed = false;  ///< by its evidence; a tentative one joins only when paired
+  bool confirmed = false;   ///< by its evidence; a tentative one joins only when paired
+  float exist_nats = 0.0f;  ///< its log-odds of existence (ekf::LandmarkPolicy): the global map keeps it
 
   static constexpr auto fields() {
-    return std::make_tuple(field("id", &SubmapLandmarkWire::id, range::at_least(0), "", "stable across maps"),
-                           field("x_m", &SubmapLandmarkWire::x_m, range::finite(), "m", "the map's frame"),
-                           field("y_m", &SubmapLandmarkWire::y_m, range::finite(), "m"),
-                           field("confirmed", &SubmapLandmarkWire::confirmed, range::one_of(0, 1)));
+    return std::make_tuple(
+        field("id", &SubmapLandmarkWire::id, range::at_least(0), "", "stable across maps"),
+        field("x_m", &SubmapLandmarkWire::x_m, range::finite(), "m", "the map's frame"),
+        field("y_m", &SubmapLandmarkWire::y_m, range::finite(), "m"),
+        field("confirmed", &SubmapLandmarkWire::confirmed, range::one_of(0, 1)),
+        field("exist_nats", &SubmapLandmarkWire::exist_nats, range::finite(), "nats", "log-odds of existence"));
   }
 };
 
@@ -738,7 +741,7 @@ struct SubmapAck : Codec<SubmapAck> {
 };
 
 /// Seeds per SUBMAP_SEED frame: a place seen before enters the local map a few landmarks a scan
-/// (the struct, which the device decodes on its stack, is 172 bytes).
+/// (the struct, which the device decodes on its stack, is 204 bytes).
 constexpr std::size_t kSeedsPerFrame = 8;
 
 struct SeedWire {
@@ -749,13 +752,16 @@ struct SeedWire {
   float p00 = 1.0f;  ///< its covariance there [p00 p01; p01 p11]: the global map's marginal
   float p01 = 0.0f;
   float p11 = 1.0f;
+  float exist_nats = 0.0f;  ///< its log-odds of existence in the global map (the device caps it at its saturation)
 
   static constexpr auto fields() {
     return std::make_tuple(field("x_m", &SeedWire::x_m, range::finite(), "m", "the local map's frame"),
                            field("y_m", &SeedWire::y_m, range::finite(), "m"),
                            field("p00", &SeedWire::p00, range::finite(), "m²", "[p00 p01; p01 p11] positive definite"),
                            field("p01", &SeedWire::p01, range::finite(), "m²"),
-                           field("p11", &SeedWire::p11, range::finite(), "m²"));
+                           field("p11", &SeedWire::p11, range::finite(), "m²"),
+                           field("exist_nats", &SeedWire::exist_nats, range::finite(), "nats",
+                                 "the global map's log-odds of existence; at most the device's saturation"));
   }
   [[nodiscard]] Error rule() const { return detail::spd2(p00, p01, p11) ? Error::kOk : Error::kNotPositiveDefinite; }
 };
@@ -947,9 +953,9 @@ static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Co
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 44 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
-                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 13 &&
+                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 17 &&
                   SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5 &&
-                  SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 20,
+                  SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 24,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto

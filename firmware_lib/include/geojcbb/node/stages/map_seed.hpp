@@ -1,8 +1,8 @@
 // node/stages: the seed of a local map from the host's global map (docs/submaps.md, "Seed";
 // SUBMAP_SEED on the link). The host gives landmarks of the global map near the robot that this
-// local map does not hold, each in the map's frame with its own covariance; each is added
-// (ekf::Slam::seed_landmark: confirmed, with the existence a landmark can bank, uncorrelated with
-// the map and with the other seeds) unless
+// local map does not hold, each in the map's frame with its own covariance and the global map's
+// log-odds of its existence; each is added (ekf::Slam::seed_landmark: confirmed, with that existence
+// capped at what a landmark can bank, uncorrelated with the map and with the other seeds) unless
 //   - a landmark the map holds is individually compatible with it (the map made it anew: the join
 //     pairs the two, a seed would be a duplicate), or
 //   - the map has no room: `limit` landmarks, its closing size (submap_landmarks) or its capacity
@@ -33,6 +33,7 @@ template <typename T>
 struct MapSeed {
   Vec2<T> l = Vec2<T>::Zero();
   Mat2<T> P = Mat2<T>::Identity();
+  T exist_nats = T(0);  ///< the global map's log-odds of its existence
 };
 
 /// What became of a seed: kNewLandmark (id: the landmark it became), kUnmatched (d2: its distance to
@@ -45,21 +46,21 @@ struct SeedAnswer {
 };
 
 /// Seeds `count` landmarks into `slam` (see the file's comment). gate_d2: the individual
-/// compatibility gate (chi-square, 2 dof); exist_nats: each seed's log-odds of existence (the
-/// policy's saturation, LandmarkPolicy confirm_nats + reserve_nats); limit: the landmarks the map may
-/// hold with its seeds (at most kMaxLandmarks - kMaxObservations).
-/// @return kOk; kInvalidInput for count out of range, exist_nats not finite or limit over that
+/// compatibility gate (chi-square, 2 dof); max_nats: the log-odds a landmark can bank (the policy's
+/// saturation, LandmarkPolicy confirm_nats + reserve_nats), which caps each seed's; limit: the
+/// landmarks the map may hold with its seeds (at most kMaxLandmarks - kMaxObservations).
+/// @return kOk; kInvalidInput for count out of range, max_nats not finite or limit over that
 ///         capacity; kNonFinite or kNotPositiveDefinite for a seed (then nothing is seeded). No state
 ///         changes unless kOk.
 template <typename T, class B>
-[[nodiscard, gnu::cold]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T exist_nats, int limit,
-                                         const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
-  if (count < 0 || count > kMaxSeeds || !std::isfinite(exist_nats) || limit > B::kMaxLandmarks - B::kMaxObservations) {
+[[nodiscard, gnu::cold, gnu::noinline]] Status seed_map(ekf::Slam<T, B>& slam, T gate_d2, T max_nats, int limit,
+                                                        const MapSeed<T>* seeds, int count, SeedAnswer<T>* out) {
+  if (count < 0 || count > kMaxSeeds || !std::isfinite(max_nats) || limit > B::kMaxLandmarks - B::kMaxObservations) {
     return Status::kInvalidInput;
   }
   for (int k = 0; k < count; ++k) {  // <= kMaxSeeds: all valid before any is seeded
     const MapSeed<T>& s = seeds[k];
-    if (!s.l.allFinite() || !s.P.allFinite()) return Status::kNonFinite;
+    if (!s.l.allFinite() || !s.P.allFinite() || !std::isfinite(s.exist_nats)) return Status::kNonFinite;
     const Mat2<T> Ps = symmetric_part(s.P);
     if (!is_spd(s.P) || !is_spd_scaled<T>(Ps(0, 0), Ps(0, 1), Ps(1, 1))) return Status::kNotPositiveDefinite;
   }
@@ -85,7 +86,7 @@ template <typename T, class B>
       continue;
     }
     if (room <= 0) continue;  // kNotAugmented
-    const Status st = slam.seed_landmark(s.l, s.P, exist_nats, a.id);
+    const Status st = slam.seed_landmark(s.l, s.P, s.exist_nats < max_nats ? s.exist_nats : max_nats, a.id);
     if (st != Status::kOk) return st;  // not reached: validated above, and the room is within capacity
     a.outcome = Outcome::kNewLandmark;
     --room;
