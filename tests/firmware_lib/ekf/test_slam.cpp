@@ -184,11 +184,7 @@ TEST_CASE_TEMPLATE(
   for (int k = 0; k < 8; ++k)
     REQUIRE(s->add_known_landmark(Vec2<T>(pts[k][0], pts[k][1]), Mat2<T>::Identity() * T(0.01), id[k]) == Status::kOk);
   LocalMapStats st;
-  auto ids = [&]() {
-    std::vector<FeatureId> v;
-    for (int a = 0; a < pred->count; ++a) v.push_back(pred->id[a]);
-    return v;
-  };
+  auto ids = [&]() { return std::vector<FeatureId>(pred->id.begin(), pred->id.begin() + pred->count); };
   // A sensor that sees all round (the default): the nearest four.
   REQUIRE(s->predict_local(T(30), *ws, *pred, st) == Status::kOk);
   CHECK(st.truncated);
