@@ -332,9 +332,9 @@ int run_replay(const ReplayOptions& o) {
     for (std::size_t k = 0; k < strategies.size(); ++k) {
       if (!agg[k].have_first) continue;
       const RunResult& r = agg[k].first;
+      const bool cov = r.map_cov.rows() == static_cast<Eigen::Index>(2 * r.map.size());
       for (std::size_t i = 0; i < r.map.size(); ++i) {
         const auto d = static_cast<Eigen::Index>(2 * i);
-        const bool cov = r.map_cov.rows() == static_cast<Eigen::Index>(2 * r.map.size());
         m << strategies[k].name() << ',' << r.map[i].x << ',' << r.map[i].y << ','
           << (cov ? std::sqrt(r.map_cov(d, d)) : std::nan("")) << ','
           << (cov ? std::sqrt(r.map_cov(d + 1, d + 1)) : std::nan("")) << '\n';

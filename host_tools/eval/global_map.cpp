@@ -237,11 +237,8 @@ JoinResult GlobalMap::join(const Submap& m) {
     const Eigen::Matrix2d Ri = J * m.P.block<2, 2>(3 + 2 * i, 3 + 2 * i) * J.transpose();
     R[static_cast<std::size_t>(i)] = 0.5 * (Ri + Ri.transpose());
   }
-  std::vector<bool> is_target(static_cast<std::size_t>(N), false);  // not a candidate: shared or removed
+  std::vector<bool> is_target = gone;  // not a candidate: removed, or shared (the target of one)
   for (int g : target) is_target[static_cast<std::size_t>(g)] = true;
-  for (int g = 0; g < N; ++g)
-    is_target[static_cast<std::size_t>(g)] =
-        is_target[static_cast<std::size_t>(g)] || gone[static_cast<std::size_t>(g)];
   std::vector<Eigen::Matrix2d> Cjj(static_cast<std::size_t>(N));
   for (int j = 0; j < N; ++j) Cjj[static_cast<std::size_t>(j)] = block_cov(j, j);
   std::vector<int> obs_of, cand_of;

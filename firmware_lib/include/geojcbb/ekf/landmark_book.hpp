@@ -50,6 +50,12 @@ struct LandmarkPolicy {
   float clutter_density = 0.003f;
   float gate_d2 = 9.21f;  ///< the association's individual gate (the area p_FA is taken over)
   float static_gate_d2 = 0.0f;
+  /// The log-odds a landmark can bank (confirm_nats + reserve_nats), in T: the book's saturation and
+  /// a seed's cap (node::seed_map) are the one number.
+  template <typename T>
+  T max_nats() const {
+    return T(confirm_nats) + T(reserve_nats);
+  }
   bool valid() const {
     return delete_nats < 0.0f && delete_nats > -1e30f && confirm_nats > 0.0f && confirm_nats < 1e30f &&
            reserve_nats >= 0.0f && reserve_nats < 1e30f && max_tentative_reviews >= 1 && max_tentative_reviews <= 255 &&
@@ -219,7 +225,7 @@ class LandmarkBook {
       if (r.hits < 65535) ++r.hits;
       r.unseen = 0;
     }
-    r.exist = std::min(r.exist + evidence, T(policy.confirm_nats) + T(policy.reserve_nats));
+    r.exist = std::min(r.exist + evidence, policy.template max_nats<T>());
     if ((r.flags & kKnownFlag) == 0 && r.exist <= T(policy.delete_nats)) r.drop = Drop::kMissed;
     if ((r.flags & kConfirmedFlag) != 0 || r.exist < T(policy.confirm_nats)) return false;
     r.flags = static_cast<std::uint8_t>(r.flags | kConfirmedFlag);

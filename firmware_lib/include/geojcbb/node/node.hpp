@@ -519,14 +519,13 @@ class Node {
       return;
     }
     MapSeed<T> seeds[kMaxSeeds];
-    SeedAnswer<T>* answers = seed_answers_;
     for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
       const proto::SeedWire& w = m.items[static_cast<std::size_t>(k)];
       seeds[k].l << T(w.x_m), T(w.y_m);
       seeds[k].P << T(w.p00), T(w.p01), T(w.p01), T(w.p11);
       seeds[k].exist_nats = T(w.exist_nats);
     }
-    if (step_.seed(seeds, m.count, answers) != Status::kOk) {
+    if (step_.seed(seeds, m.count, seed_answers_) != Status::kOk) {
       invalid();
       return;
     }
@@ -534,9 +533,9 @@ class Node {
     result_.count = m.count;
     for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
       proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(k)];
-      q.outcome = static_cast<proto::PairingOutcome>(answers[k].outcome);
-      q.feature_id = answers[k].id;
-      q.d2 = static_cast<float>(answers[k].d2);
+      q.outcome = static_cast<proto::PairingOutcome>(seed_answers_[k].outcome);
+      q.feature_id = seed_answers_[k].id;
+      q.d2 = static_cast<float>(seed_answers_[k].d2);
     }
     send(result_);
     applied();
@@ -730,8 +729,8 @@ class Node {
   proto::Config rx_config_;
   StepSettings<T> settings_;               ///< CONFIG's settings, built here rather than on the stack
   AssocResult result_;                     ///< the last batch's, kept for a retransmitted OBS_BATCH
-  SeedAnswer<T> seed_answers_[kMaxSeeds];  ///< SUBMAP_SEED's answers, before they go into result_
   proto::Pose pose_;                       ///< likewise
+  SeedAnswer<T> seed_answers_[kMaxSeeds];  ///< SUBMAP_SEED's answers, before they go into result_
   proto::Decoder decoder_;
   proto::MessageCounters msg_counters_;
   proto::EncodedFrame frame_;

@@ -147,8 +147,8 @@ class SlamStep {
     if (cfg_.submap_landmarks > 0 && static_cast<int>(cfg_.submap_landmarks) < limit) {
       limit = static_cast<int>(cfg_.submap_landmarks);
     }
-    return seed_map(slam_, static_cast<T>(cfg_.gate.individual),
-                    static_cast<T>(policy_.confirm_nats + policy_.reserve_nats), limit, seeds, count, out);
+    return seed_map(slam_, static_cast<T>(cfg_.gate.individual), policy_.template max_nats<T>(), limit, seeds, count,
+                    out);
   }
   /// Metres travelled and scans taken since the local map began (reset, restart).
   T travelled_m() const { return travelled_m_; }

@@ -47,7 +47,7 @@ struct SeedAnswer {
 
 /// Seeds `count` landmarks into `slam` (see the file's comment). gate_d2: the individual
 /// compatibility gate (chi-square, 2 dof); max_nats: the log-odds a landmark can bank (the policy's
-/// saturation, LandmarkPolicy confirm_nats + reserve_nats), which caps each seed's; limit: the
+/// saturation, LandmarkPolicy::max_nats), which caps each seed's; limit: the
 /// landmarks the map may hold with its seeds (at most kMaxLandmarks - kMaxObservations).
 /// @return kOk; kInvalidInput for count out of range, max_nats not finite or limit over that
 ///         capacity; kNonFinite or kNotPositiveDefinite for a seed (then nothing is seeded). No state
