@@ -19,6 +19,7 @@ void RunAggregate::add(const RunResult& r, double run_s_, double kidnap_t_s) {
   submaps.removed += m.removed;
   submaps.refused += m.refused;
   submaps.wrong += m.wrong;
+  submaps.wrong_in_group += m.wrong_in_group;
   submaps.seeded += m.seeded;
   submaps.joins.insert(submaps.joins.end(), m.joins.begin(), m.joins.end());
   submaps.frames += m.frames;
@@ -279,7 +280,7 @@ void print_submaps(const std::vector<Method>& strategies, const std::vector<RunA
   std::fprintf(f,
                "\nLocal maps joined on the host (docs/submaps.md; summed over the runs)\n"
                "| strategy | local maps | landmarks per map (max) | offered | fused | declined | joins refused | "
-               "wrong joins | global map | slowest step / first map's | seeds taken |\n"
+               "wrong joins (in a group) | global map | slowest step / first map's | seeds taken |\n"
                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (std::size_t k = 0; k < agg.size() && k < strategies.size(); ++k) {
     const SubmapStats& m = agg[k].submaps;
@@ -289,8 +290,9 @@ void print_submaps(const std::vector<Method>& strategies, const std::vector<RunA
     const double global = agg[k].runs > 0 ? double(agg[k].landmarks) / agg[k].runs : 0;  // per run
     char ratio[32] = "-";  // not timed (through a device: geojcbb_qemu --budget counts instructions)
     if (agg[k].worst_step_ratio > 0) std::snprintf(ratio, sizeof ratio, "%.2f", agg[k].worst_step_ratio);
-    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d | %.0f | %s | %d |\n", strategies[k].name().c_str(),
-                 m.maps, most, m.offered, m.fused, m.declined, m.refused, m.wrong, global, ratio, m.seeded);
+    std::fprintf(f, "| %s | %d | %d | %d | %d | %d | %d | %d (%d) | %.0f | %s | %d |\n", strategies[k].name().c_str(),
+                 m.maps, most, m.offered, m.fused, m.declined, m.refused, m.wrong, m.wrong_in_group, global, ratio,
+                 m.seeded);
   }
   for (std::size_t k = 0; k < agg.size() && k < strategies.size(); ++k) {
     const SubmapStats& m = agg[k].submaps;

@@ -63,7 +63,7 @@ void SlamSession::State::hand_over() {
   const Submap m = submap_of(slam, st.maps);
   id_truth.resize(sc.ids(), RunScorer::kUnknown);
   for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
-  record_join(st, global->join(m), *global, last_t, id_truth, map_worst_s);
+  record_join(st, global->join(m), *global, last_t, id_truth, opt.landmark_group, map_worst_s);
   map_worst_s = 0;
   check(step.restart(), "restart");
   for (FeatureId id : m.ids) {  // the landmarks not carried into the next map leave the scorer's map
@@ -108,7 +108,7 @@ std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSett
 }
 
 void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& global, double t_s,
-                 const std::vector<int>& id_truth, double worst_step_s) {
+                 const std::vector<int>& id_truth, const std::vector<int>& landmark_group, double worst_step_s) {
   ++st.maps;
   st.offered += joined.offered;
   st.fused += joined.fused;
@@ -121,7 +121,11 @@ void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& glo
   };
   for (const auto& p : joined.pairs) {
     const int a = truth(p.first), b = truth(p.second);
-    st.wrong += a >= 0 && b >= 0 && a != b;
+    if (a < 0 || b < 0 || a == b) continue;
+    ++st.wrong;
+    const auto groups = static_cast<int>(landmark_group.size());
+    st.wrong_in_group += a < groups && b < groups &&
+                         landmark_group[static_cast<std::size_t>(a)] == landmark_group[static_cast<std::size_t>(b)];
   }
   JoinRecord j;
   static_cast<JoinCounts&>(j) = joined;

@@ -259,7 +259,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     }
     // The step's cost is not timed through a link (round trips are not steps): the device reports
     // its instruction counts in STATS (geojcbb_qemu --budget gives each local map's largest step).
-    record_join(res.submaps, global->join(m), *global, last_t, id_truth, 0.0);
+    record_join(res.submaps, global->join(m), *global, last_t, id_truth, o.landmark_group, 0.0);
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);

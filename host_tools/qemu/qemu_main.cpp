@@ -271,10 +271,17 @@ int run(int argc, char** argv) {
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::string verdict;
       if (check) {
-        verdict = mr.mismatched == 0 ? "equal (" + std::to_string(mr.assoc_results) + " results, " +
-                                           std::to_string(mr.poses) + " poses)"
-                                     : std::to_string(mr.mismatched) + " DIFFER; first: " + mr.first_mismatch;
-        if (mr.mismatched != 0 || mr.assoc_results != static_cast<std::uint64_t>(r.scans)) rc = 1;
+        // One ASSOC_RESULT per scan and one per SUBMAP_SEED sent.
+        const std::uint64_t expected = static_cast<std::uint64_t>(r.scans) + mr.seeds_sent;
+        verdict = mr.mismatched == 0
+                      ? "equal (" + std::to_string(mr.assoc_results) + " results, " + std::to_string(mr.seeds_sent) +
+                            " of them seeds', " + std::to_string(mr.poses) + " poses)"
+                      : std::to_string(mr.mismatched) + " DIFFER; first: " + mr.first_mismatch;
+        if (mr.assoc_results != expected) {
+          verdict += "; " + std::to_string(expected) + " results expected";
+          rc = 1;
+        }
+        if (mr.mismatched != 0) rc = 1;
       }
       print_score_row(m.name(), r, r.scans / secs, verdict);
       if (r.submaps.maps > 0) {

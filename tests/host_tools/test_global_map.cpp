@@ -206,3 +206,20 @@ TEST_CASE(
   REQUIRE(g.landmarks() == 4);
   CHECK(g.existence(3) == doctest::Approx(11.5));
 }
+
+TEST_CASE("global map: a wrong join within a landmark group is counted as wrong and, apart, as in the group") {
+  // Fused pairs (local id, global first id); truths by id: 0 -> 0, 1 -> 1, 2 -> 2, 3 -> 3, 4 unknown.
+  // Groups: {0, 1} (closer than the sensor separates), {2}, {3}.
+  GlobalMap g(JoinOptions{});
+  JoinResult j;
+  j.pairs = {{0, 1}, {2, 3}, {1, 1}, {4, 0}};
+  const std::vector<int> id_truth{0, 1, 2, 3, RunScorer::kUnknown};
+  SubmapStats st;
+  record_join(st, j, g, 1.0, id_truth, {0, 0, 1, 2}, 0.0);
+  CHECK(st.wrong == 2);           // 0 with 1 and 2 with 3; 1 with 1 is right, an unknown truth is not counted
+  CHECK(st.wrong_in_group == 1);  // 0 with 1
+  SubmapStats none;
+  record_join(none, j, g, 1.0, id_truth, {}, 0.0);  // no groups: each landmark its own
+  CHECK(none.wrong == 2);
+  CHECK(none.wrong_in_group == 0);
+}

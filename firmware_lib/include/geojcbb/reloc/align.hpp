@@ -30,6 +30,7 @@
 
 #include "geojcbb/consistency/pairwise.hpp"
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/gate/validate.hpp"
 #include "geojcbb/reloc/align_options.hpp"
@@ -303,12 +304,12 @@ template <typename T, class B>
 T set_log_likelihood_at(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x, const AlignOptions<T>& view,
                         const SetModel<T>& model) {
   const Mat2<T> Rot = rotation(x.theta);
-  const T log_2pi = std::log(T(2) * kPi<T>);
+  const T log_2pi = fmath::log(T(2) * kPi<T>);
   T ll = T(0);
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     if (ws.skip[i]) continue;
     if (ws.pick[i] < 0) {
-      ll += std::log(model.unexplained_density);
+      ll += fmath::log(model.unexplained_density);
       continue;
     }
     const int j = ws.pick[i];
@@ -317,10 +318,10 @@ T set_log_likelihood_at(const AlignWorkspace<T, B>& ws, int m, const Pose2<T>& x
     const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
     if (!(det > T(0))) return -std::numeric_limits<T>::infinity();
     const T d2 = (S(1, 1) * e.x() * e.x() - (S(0, 1) + S(1, 0)) * e.x() * e.y() + S(0, 0) * e.y() * e.y()) / det;
-    ll += std::log(model.p_detect) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det);
+    ll += fmath::log(model.p_detect) - T(0.5) * d2 - log_2pi - T(0.5) * fmath::log(det);
   }
   const int missed = view.max_range_m > T(0) ? misses(ws, m, x, view) : 0;
-  return ll + T(missed) * std::log(T(1) - model.p_detect);
+  return ll + T(missed) * fmath::log(T(1) - model.p_detect);
 }
 }  // namespace align_detail
 /// Log-likelihood [nats] of the hypothesis in ws.pick (per observation a sorted map index, or -1)
@@ -573,12 +574,12 @@ template <typename T, class B>
   r.unmapped = false;
   if (best >= 0 && !r.ambiguous && opt.test_unmapped) {
     T none = T(0);
-    for (int i = 0; i < m; ++i) none += ws.skip[i] ? T(0) : std::log(opt.model.unexplained_density);  // <= m
+    for (int i = 0; i < m; ++i) none += ws.skip[i] ? T(0) : fmath::log(opt.model.unexplained_density);  // <= m
     // log sqrt det C of the fit's covariance from its Cholesky factor (C not positive definite: unmapped)
     const Eigen::LLT<Mat3<T>> llt(cov[best]);
     const Vec3<T> l = llt.matrixL().toDenseMatrix().diagonal();
-    const T half_logdet = std::log(l(0)) + std::log(l(1)) + std::log(l(2));
-    const T occam = opt.has_prior ? -opt.prior_half_logdet : T(1.5) * std::log(T(2) * kPi<T>) - opt.free_log_volume;
+    const T half_logdet = fmath::log(l(0)) + fmath::log(l(1)) + fmath::log(l(2));
+    const T occam = opt.has_prior ? -opt.prior_half_logdet : T(1.5) * fmath::log(T(2) * kPi<T>) - opt.free_log_volume;
     r.unmapped = llt.info() != Eigen::Success || !(post[best] + half_logdet + occam >= none + opt.margin_nats);
   }
   if (best >= 0 && !r.ambiguous && !r.unmapped) {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 
@@ -125,7 +126,7 @@ bool set_prior(const Pose2<T>& mean, const Mat3<T>& P, AlignOptions<T>& opt) {
   if (!(A(0, 0) > T(0)) || !(m2 > T(0)) || !(det > T(0))) return false;
   opt.prior_info << c00, c01, c02, c01, c11, c12, c02, c12, c22;
   opt.prior_info /= det;
-  opt.prior_half_logdet = T(0.5) * std::log(det);
+  opt.prior_half_logdet = T(0.5) * fmath::log(det);
   opt.prior_mean = mean;
   opt.has_prior = all_finite(opt.prior_info);
   return opt.has_prior;

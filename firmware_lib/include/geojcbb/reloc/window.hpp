@@ -24,6 +24,7 @@
 #include <limits>
 
 #include "geojcbb/core/association_types.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/reloc/align.hpp"
 #include "geojcbb/reloc/loop.hpp"
 
@@ -106,7 +107,7 @@ T update(PoseHypothesis<T>& h, const Vec2<T>& nu, const Mat2<T>& S, const Mat23<
   const Mat2<T> R = S - Jx * h.P * Jx.transpose();            // the pair's own part (measurement and landmark)
   h.P = IKH * h.P * IKH.transpose() + K * R * K.transpose();  // Joseph form
   h.P = T(0.5) * (h.P + h.P.transpose());
-  return log_pd - T(0.5) * d2 - std::log(T(2) * kPi<T>) - T(0.5) * std::log(det);
+  return log_pd - T(0.5) * d2 - fmath::log(T(2) * kPi<T>) - T(0.5) * fmath::log(det);
 }
 
 }  // namespace window_detail
@@ -122,7 +123,7 @@ template <typename T, class B>
                                const AlignOptions<T>& view, T gate_d2, bool grow, PoseHypothesis<T>& h) {
   using namespace window_detail;
   const int m = obs.count;
-  const T log_pd = std::log(model.p_detect);
+  const T log_pd = fmath::log(model.p_detect);
   std::array<std::uint32_t, (B::kMaxLandmarks + 31) / 32> taken{};
   auto take = [&](int j) { taken[static_cast<std::size_t>(j / 32)] |= std::uint32_t(1) << (j % 32); };
   auto free = [&](int j) { return (taken[static_cast<std::size_t>(j / 32)] & (std::uint32_t(1) << (j % 32))) == 0; };
@@ -166,10 +167,10 @@ template <typename T, class B>
   }
   for (int i = 0; i < m; ++i) {  // <= kMaxObservations
     // The density is per m^2; per (m, rad) of the range-bearing space it is density * range.
-    if (map.pick[i] < 0 && !map.skip[i]) ll += std::log(model.unexplained_density * std::max(obs.z[i].x(), T(0.1)));
+    if (map.pick[i] < 0 && !map.skip[i]) ll += fmath::log(model.unexplained_density * std::max(obs.z[i].x(), T(0.1)));
   }
   const int missed = view.max_range_m > T(0) ? align_detail::misses(map, m, h.x, view) : 0;
-  return ll + T(missed) * std::log(T(1) - model.p_detect);
+  return ll + T(missed) * fmath::log(T(1) - model.p_detect);
 }
 
 /// The pairs of a pairing (entries >= 0). Bound: m.

@@ -93,6 +93,7 @@ struct SubmapStats {
   int removed = 0;                ///< global landmarks removed by a local map's evidence (seeds it removed)
   int refused = 0;                ///< joins refused (their pairs not jointly compatible)
   int wrong = 0;                  ///< fused pairs of two different true landmarks (labelled data)
+  int wrong_in_group = 0;         ///< of those, two of one landmark group (closer than the sensor separates)
   int seeded = 0;                 ///< global landmarks the local maps took as seeds (--submap-seed)
   std::vector<JoinRecord> joins;  ///< per local map: what its join did
   // Through a device (stream_run):

@@ -70,10 +70,12 @@ StepSettings<double> step_settings(const RunOptions& opt, const SensorModel& sen
 /// step's confidence. Throws std::invalid_argument for an unknown preset.
 std::unique_ptr<GlobalMap> make_global_map(const RunOptions& opt, const StepSettings<double>& step);
 /// A join's figures added to the run's (maps, offered, fused, declined, refused; a fused pair of two
-/// different known truths, id_truth[id] >= 0, is a wrong join) and its record (SubmapStats::joins):
-/// its counts, the closing scan's time t_s, the map's worst step and the global map's base after it.
+/// different known truths, id_truth[id] >= 0, is a wrong join, and one within a group of
+/// landmark_group, true landmark -> group, empty: none, is also counted in wrong_in_group) and its
+/// record (SubmapStats::joins): its counts, the closing scan's time t_s, the map's worst step and the
+/// global map's base after it.
 void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& global, double t_s,
-                 const std::vector<int>& id_truth, double worst_step_s);
+                 const std::vector<int>& id_truth, const std::vector<int>& landmark_group, double worst_step_s);
 /// The run's map is the global one: its landmarks with their truths (id_truth[first id], unknown when
 /// out of range), the spurious count, landmarks and map_cov.
 void take_global_map(RunResult& res, const GlobalMap& global, const std::vector<int>& id_truth);

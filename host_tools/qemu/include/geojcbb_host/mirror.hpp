@@ -22,7 +22,8 @@ struct MirrorReport {
   std::uint64_t compared = 0;    ///< replies compared
   std::uint64_t mismatched = 0;  ///< replies that differ (type or payload), or have no counterpart
   std::uint64_t assoc_results = 0, poses = 0;
-  std::string first_mismatch;  ///< a description of the first one
+  std::uint64_t seeds_sent = 0;  ///< SUBMAP_SEED frames the host sent (each answered by an ASSOC_RESULT)
+  std::string first_mismatch;    ///< a description of the first one
 };
 
 template <class B>
@@ -43,6 +44,11 @@ class MirrorTransport : public Transport {
   void write(const std::uint8_t* p, std::size_t n) override {
     dev_.write(p, n);
     ref_->on_bytes(p, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      proto::FrameView f;
+      if (host_dec_.push(p[i], f) == proto::Error::kOk)
+        report_.seeds_sent += f.type == static_cast<std::uint8_t>(proto::MsgType::kSubmapSeed);
+    }
   }
   /// Replies the reference made that the device has not (yet) matched count as mismatches here.
   MirrorReport report() const {
@@ -98,7 +104,7 @@ class MirrorTransport : public Transport {
 
   Transport& dev_;
   std::unique_ptr<node::Node<float, B>> ref_;
-  proto::Decoder dev_dec_, ref_dec_;
+  proto::Decoder dev_dec_, ref_dec_, host_dec_;
   std::deque<Reply> expected_;
   MirrorReport report_;
 };

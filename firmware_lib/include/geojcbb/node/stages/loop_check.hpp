@@ -18,6 +18,7 @@
 #include <limits>
 
 #include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
 #include "geojcbb/reloc/loop.hpp"
@@ -213,7 +214,7 @@ class LoopCheck {
         const Vec2<T> nu = innovation(obs.z[static_cast<std::size_t>(i)], pred.h[static_cast<std::size_t>(a)]);
         const T d2 =
             (S(1, 1) * nu.x() * nu.x() - (S(0, 1) + S(1, 0)) * nu.x() * nu.y() + S(0, 0) * nu.y() * nu.y()) / det;
-        const T ll = T(-0.5) * (d2 + std::log(det));
+        const T ll = T(-0.5) * (d2 + fmath::log(det));
         if (pred.id[static_cast<std::size_t>(a)] == assoc.feature[i]) {
           ll_pair = ll;
         } else {

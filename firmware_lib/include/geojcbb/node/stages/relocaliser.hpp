@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "geojcbb/core/association_config.hpp"
+#include "geojcbb/core/fmath.hpp"
 #include "geojcbb/ekf/slam.hpp"
 #include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
@@ -72,7 +73,7 @@ template <typename T, class B>
 [[gnu::noinline]] T scan_evidence(const Observations<T, B>& obs, const Prediction<T, B>& pred,
                                   const Association<T, B>& assoc, const MapView<T, B>& map, FeatureId before,
                                   const ekf::Visibility<T>& view, const reloc::SetModel<T>& model) {
-  const T log_2pi = std::log(T(2) * kPi<T>), log_density = std::log(model.unexplained_density);
+  const T log_2pi = fmath::log(T(2) * kPi<T>), log_density = fmath::log(model.unexplained_density);
   T e = T(0);
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     const int k = map.slot_of(pred.id[a]);
@@ -81,14 +82,14 @@ template <typename T, class B>
     int i = 0;
     while (i < assoc.count && assoc.feature[i] != pred.id[a]) ++i;  // <= kMaxObservations
     if (i == assoc.count) {
-      e += ekf::in_view(pred, a, view) ? std::log(T(1) - p) : T(0);
+      e += ekf::in_view(pred, a, view) ? fmath::log(T(1) - p) : T(0);
       continue;
     }
     const Mat2<T> S = pred.C.block(a, a) + obs.R[i];
     const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
     if (!(det > T(0)) || !(obs.z[i].x() > T(0))) continue;  // no evidence either way
     const T d2 = mahalanobis2(innovation(obs.z[i], pred.h[a]), S);
-    e += std::log(p) - T(0.5) * d2 - log_2pi - T(0.5) * std::log(det) - log_density - std::log(obs.z[i].x());
+    e += fmath::log(p) - T(0.5) * d2 - log_2pi - T(0.5) * fmath::log(det) - log_density - fmath::log(obs.z[i].x());
   }
   return e;
 }
@@ -154,7 +155,7 @@ class Relocaliser {
     // elsewhere (pose-free, "not of the map" is uniform over the map's box and every heading).
     align.test_unmapped = true;
     const Vec2<T> ext = (hi - lo).cwiseMax(Vec2<T>::Constant(T(1)));
-    align.free_log_volume = std::log(ext.x() * ext.y() * T(2) * kPi<T>);
+    align.free_log_volume = fmath::log(ext.x() * ext.y() * T(2) * kPi<T>);
     const Status st = reloc::align(obs, align, scratch.ws, scratch.result);
     if (st != Status::kOk) return st;
     const reloc::AlignResult<T, B>& a = scratch.result;
