@@ -126,7 +126,8 @@ JoinResult GlobalMap::join(const Submap& m) {
   const int n = m.landmarks();
   res.landmarks = n;
   if (m.x.size() != 3 + 2 * n || m.P.rows() != m.x.size() || m.P.cols() != m.x.size() ||
-      m.confirmed.size() != m.ids.size() || m.exist_nats.size() != m.ids.size()) {
+      m.confirmed.size() != m.ids.size() || m.exist_nats.size() != m.ids.size() ||
+      (!m.carried.empty() && m.carried.size() != m.ids.size())) {
     throw std::runtime_error("join: a local map whose state and covariance do not match its landmarks");
   }
   // The landmarks the map shares with the global one: carried over from the previous map, or
@@ -156,10 +157,13 @@ JoinResult GlobalMap::join(const Submap& m) {
     is_shared[static_cast<std::size_t>(i)] = true;
   }
   res.shared = static_cast<int>(shared.size());
-  // Seeds the map took and no longer holds: it removed them by their evidence (missed where they were
-  // expected, from the global map's log-odds on), so the global map removes them too.
+  // Seeds the map took (and with remove_carried, landmarks it was born with, carried over) that it no
+  // longer holds: it removed them by their evidence (missed where they were expected, from the global
+  // map's log-odds on), so the global map removes them too.
   std::vector<bool> gone(first_id_.size(), false);
-  for (FeatureId id : seed_ids_) {
+  std::vector<FeatureId> taken = seed_ids_;
+  if (opt_.remove_carried) taken.insert(taken.end(), carried_ids_.begin(), carried_ids_.end());
+  for (FeatureId id : taken) {
     if (std::find(m.ids.begin(), m.ids.end(), id) != m.ids.end()) continue;
     const int g = global_index(id);
     if (g >= 0 && !gone[static_cast<std::size_t>(g)]) {
@@ -438,6 +442,10 @@ JoinResult GlobalMap::join(const Submap& m) {
   seed_ = Seed{};
   seed_ids_.clear();
   seed_refused_.clear();
+  carried_ids_.clear();
+  for (std::size_t i = 0; i < m.carried.size(); ++i) {
+    if (m.carried[i]) carried_ids_.push_back(m.ids[i]);
+  }
   ++maps_;
   return res;
 }

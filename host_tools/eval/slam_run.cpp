@@ -60,7 +60,8 @@ void SlamSession::State::hand_over() {
   RunScorer& sc = *scorer;
   SubmapStats& st = sc.result().submaps;
   const ekf::Slam<double, EB>& slam = step.slam();
-  const Submap m = submap_of(slam, st.maps);
+  Submap m = submap_of(slam, st.maps);
+  for (int j = 0; j < slam.landmarks(); ++j) m.carried.push_back(step.carried(j));
   id_truth.resize(sc.ids(), RunScorer::kUnknown);
   for (FeatureId id : m.ids) id_truth[static_cast<std::size_t>(id)] = sc.truth_of(id);
   record_join(st, global->join(m), *global, last_t, id_truth, opt.landmark_group, map_worst_s);

@@ -171,6 +171,7 @@ Submap submap_from_wire(const LinkClient::WireSubmap& w, int index) {
     m.ids.push_back(l.id);
     m.confirmed.push_back(l.confirmed);
     m.exist_nats.push_back(l.exist_nats);
+    m.carried.push_back(l.carried);
   }
   m.P.resize(d, d);
   for (int c = 0; c < d; ++c) {

@@ -619,11 +619,14 @@ TEST_CASE("node: a closed local map is handed over whole from the filter, and th
   CHECK(s.x(1) == 0.0f);
   CHECK(s.x(2) == 0.0f);
   CHECK(s.landmarks() <= n);
-  for (int j = 0; j < s.landmarks(); ++j) {  // the carried ones keep their ids
+  for (int j = 0; j < s.landmarks(); ++j) {  // the carried ones keep their ids, and SUBMAP named them
     bool found = false;
-    for (const auto& l : m.landmarks) found = found || l.id == s.id(j);
+    for (const auto& l : m.landmarks) found = found || (l.id == s.id(j) && l.carried);
     CHECK(found);
   }
+  int named = 0;  // and named no other
+  for (const auto& l : m.landmarks) named += l.carried;
+  CHECK(named == s.landmarks());
   // The refused frames, sent again with their own seq, are applied now; the ACK repeated is harmless.
   h.out.clear();
   h.send_bytes(h.frame(test_odometry(), odo_seq));

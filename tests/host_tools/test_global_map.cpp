@@ -88,6 +88,35 @@ TEST_CASE("global map: a carried landmark the new map learned nothing about leav
   CHECK(g.landmarks() == 3);
 }
 
+TEST_CASE("global map: a carried landmark the next map removed leaves the global map; one never carried stays") {
+  JoinOptions o;
+  o.remove_carried = true;
+  GlobalMap g(o);
+  // Map 0 ends at (10, 0, 0) with three landmarks; the next map begins with 0 and 1 (carried over).
+  Submap m0 = make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}, {-20, 3}}, {0, 1, 2}, 0.04);
+  m0.carried = {true, true, false};
+  g.join(m0);
+  REQUIRE(g.landmarks() == 3);
+  // Map 1 holds 0 and a new one far from all; 1 it removed by its evidence (missed in view); 2 it
+  // never held (not carried: out of view at the restart).
+  const JoinResult j = g.join(make_map(1, {1, 0, 0}, {{2, 1}, {40, 0}}, {0, 5}, 0.01));
+  CHECK(j.shared == 1);
+  CHECK(j.removed == 1);
+  REQUIRE(g.landmarks() == 3);  // 0 and 2 kept, 1 removed, 5 new
+  CHECK(g.first_id(0) == 0);
+  CHECK(g.first_id(1) == 2);
+  CHECK(g.first_id(2) == 5);
+  // Without remove_carried (the default) the carried landmark the map removed stays.
+  GlobalMap d(JoinOptions{});
+  d.join(m0);
+  CHECK(d.join(make_map(1, {1, 0, 0}, {{2, 1}, {40, 0}}, {0, 5}, 0.01)).removed == 0);
+  CHECK(d.landmarks() == 4);
+  // Map 1 named none carried (an empty list: not known): nothing is removed for want of it.
+  const JoinResult k = g.join(make_map(2, {1, 0, 0}, {{50, 0}}, {6}, 0.01));
+  CHECK(k.removed == 0);
+  CHECK(g.landmarks() == 4);
+}
+
 TEST_CASE("global map: env1 in local maps of 30 landmarks, carried over and seeded: no wrong join, every map joined") {
   const Scenario s = load_scenario(std::string(GEOJCBB_SCENARIO_DIR) + "/env1.json");
   RunOptions single;

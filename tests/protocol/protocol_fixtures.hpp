@@ -207,7 +207,7 @@ inline Submap sample<Submap>() {  // chunk 1 of a 20-landmark map: landmarks 16.
   m.y_m = -3.25f;
   m.theta_rad = 0.75f;
   m.count = 4;
-  for (std::uint8_t k = 0; k < m.count; ++k) m.items[k] = {40 + k, 1.0f + k, -2.0f * k, k % 2 == 0, 4.5f * k};
+  for (std::uint8_t k = 0; k < m.count; ++k) m.items[k] = {40 + k, 1.0f + k, -2.0f * k, k % 2 == 0, k < 2, 4.5f * k};
   return m;
 }
 template <>

@@ -610,6 +610,7 @@ class Node {
         w.y_m = static_cast<float>(l.y());
         w.confirmed = s.confirmed(j);
         w.exist_nats = static_cast<float>(s.existence(j));
+        w.carried = step_.carried(j);
       }
       send_out_of_line(m);
     }

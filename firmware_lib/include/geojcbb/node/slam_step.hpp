@@ -124,18 +124,22 @@ class SlamStep {
   [[nodiscard, gnu::cold]] Status restart() {
     std::int16_t keep[B::kMaxLandmarks];  // the only array on the stack: the frame stays within 512 B
     int kept = 0;
-    for (int j = 0; cfg_.submap_carry && j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
-      if (!slam_.confirmed(j)) continue;
-      for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates: in the last scan's region
-        if (pred_.id[a] == slam_.id(j)) {
-          keep[kept++] = static_cast<std::int16_t>(j);
-          break;
-        }
-      }
+    for (int j = 0; j < slam_.landmarks(); ++j) {  // <= kMaxLandmarks
+      if (carried(j)) keep[kept++] = static_cast<std::int16_t>(j);
     }
     const Status st = slam_.restart(Mat3<T>::Identity() * kOriginVariance, keep, kept);
     if (st == Status::kOk) begin_map();
     return st;
+  }
+  /// Whether restart() now would keep landmark j (index): with submap_carry, a confirmed landmark of
+  /// the last scan's region. SUBMAP names them, so the host knows which the next map began with.
+  /// O(kMaxCandidates).
+  bool carried(int j) const {
+    if (!cfg_.submap_carry || !slam_.confirmed(j)) return false;
+    for (int a = 0; a < pred_.count; ++a) {  // <= kMaxCandidates: in the last scan's region
+      if (pred_.id[a] == slam_.id(j)) return true;
+    }
+    return false;
   }
   /// Landmarks of the global map seeded into the local map (stages/map_seed.hpp: each added, with its
   /// existence capped at the policy's saturation, unless one the map holds is compatible with it or

@@ -44,6 +44,10 @@ struct Submap {
   /// keeps it: a seed starts from it, and a seed the map took and removed by its evidence (missed
   /// where it was expected) leaves the global map.
   std::vector<double> exist_nats;
+  /// Per landmark: kept into the next map (SUBMAP's `carried`, node::SlamStep::carried); empty when
+  /// not known. One the next map no longer holds at its hand-over was removed there by its evidence
+  /// (JoinOptions::remove_carried: it leaves the global map, as a seed the map took does).
+  std::vector<bool> carried;
   Eigen::VectorXd x;  ///< [x_r, y_r, theta_r, l_1x, l_1y, ...], 3 + 2 ids.size()
   Eigen::MatrixXd P;  ///< its covariance
   int landmarks() const { return static_cast<int>(ids.size()); }
@@ -79,6 +83,11 @@ struct JoinOptions {
   /// The association's pairings tested again with the full covariance (the local map's own
   /// correlations, which the association leaves out): only a jointly compatible subset is fused.
   bool joint_check = true;
+  /// A landmark the local map was born with (carried over: Submap::carried of the map before) and no
+  /// longer holds at its join leaves the global map, as a removed seed does. Off by default: on
+  /// Victoria Park through the default-bounds device it set off a chain of maps born full
+  /// (docs/submaps.md, "Carried landmarks removed").
+  bool remove_carried = false;
 };
 
 /// What one join did, and its pairs.
@@ -162,6 +171,7 @@ class GlobalMap {
   Seed seed_;                                           ///< the current map's seeds, stacked
   std::vector<FeatureId> seed_ids_;                     ///< its landmarks' local ids
   std::vector<FeatureId> seed_refused_;                 ///< first ids the current map refused (compatible)
+  std::vector<FeatureId> carried_ids_;                  ///< the last map's landmarks kept into this one
   std::unordered_map<FeatureId, FeatureId> global_of_;  ///< local id -> its global landmark's first id
   std::unique_ptr<Association> assoc_;                  ///< the association's workspace (large: on the heap)
 };

@@ -58,6 +58,9 @@ inline void add_run_options(CLI::App& app, RunOptions& run) {
                  "a pairing between maps that a runner-up within this joint d2 makes differently is kept apart")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e6));
+  app.add_flag("--join-remove-carried", run.join.remove_carried,
+               "a landmark a local map was born with (carried over) and removed by its evidence leaves the global "
+               "map, as a removed seed does (docs/submaps.md)");
 }
 
 }  // namespace geojcbb::host

@@ -618,7 +618,8 @@ struct Pose : Codec<Pose> {
 
 /// Landmarks per SUBMAP frame, and covariance entries per SUBMAP_COV frame: each message's struct
 /// (the device builds one at a time on its stack) stays within the 512-byte frame limit of the
-/// firmware's stack check (docs/firmware.md), 348 and 400 bytes.
+/// firmware's stack check (docs/firmware.md), 348 and 400 bytes (SUBMAP's landmark is 20 bytes in
+/// the struct, 18 on the wire).
 constexpr std::size_t kSubmapLandmarksPerFrame = 16;
 constexpr std::size_t kSubmapCovPerFrame = 96;
 
@@ -642,7 +643,10 @@ struct SubmapLandmarkWire {
   std::int32_t id = 0;  ///< the landmark's id (ids go on across maps; a carried landmark keeps its id)
   float x_m = 0.0f;     ///< in the map's frame
   float y_m = 0.0f;
-  bool confirmed = false;   ///< by its evidence; a tentative one joins only when paired
+  bool confirmed = false;  ///< by its evidence; a tentative one joins only when paired
+  /// Kept into the next map (the restart's carry): one the next map no longer holds when it is handed
+  /// over was removed there by its evidence, and leaves the global map.
+  bool carried = false;
   float exist_nats = 0.0f;  ///< its log-odds of existence (ekf::LandmarkPolicy): the global map keeps it
 
   static constexpr auto fields() {
@@ -651,6 +655,7 @@ struct SubmapLandmarkWire {
         field("x_m", &SubmapLandmarkWire::x_m, range::finite(), "m", "the map's frame"),
         field("y_m", &SubmapLandmarkWire::y_m, range::finite(), "m"),
         field("confirmed", &SubmapLandmarkWire::confirmed, range::one_of(0, 1)),
+        field("carried", &SubmapLandmarkWire::carried, range::one_of(0, 1), "", "kept into the next map"),
         field("exist_nats", &SubmapLandmarkWire::exist_nats, range::finite(), "nats", "log-odds of existence"));
   }
 };
@@ -953,7 +958,7 @@ static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Co
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 44 && Stats::kPayloadSize == 96 &&
                   ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
-                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 17 &&
+                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 18 &&
                   SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5 &&
                   SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 24,
               "payload sizes of version 1 (docs/protocol.md)");
