@@ -231,18 +231,14 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   double last_t = 0;            // the last answered scan's time (a join's)
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
-  // The seed (SUBMAP_SEED before each batch): where the robot was at the last reply (the world's
-  // frame), and the ids the current local map answered with (paired, new or seeded): the carried
-  // ones it has not re-observed yet are offered and refused as compatible, once.
+  // The seed (SUBMAP_SEED before each batch) around where the robot was at the last reply (the
+  // world's frame). The host holds nothing back as "held": it does not see the device remove a
+  // landmark by its evidence, so the device decides. A seed compatible with a landmark it holds is
+  // refused, once (not offered again to this map); one whose landmark it removed, it takes.
   if (o.submap_seed && (!global || window != 1)) {
     throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
   }
   Eigen::Vector2d here(src.x0.x, src.x0.y);
-  std::vector<FeatureId> held;  // sorted, each id once (bounded by the map's landmarks)
-  auto hold = [&held](FeatureId id) {
-    const auto at = std::lower_bound(held.begin(), held.end(), id);
-    if (at == held.end() || *at != id) held.insert(at, id);
-  };
   auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
     for (const RunInput& in : ins) {
       last_pose = moved(last_pose, in);
@@ -264,13 +260,12 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);
-    held.clear();
     res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   };
 
   // The seed of the current local map before a batch: the global map's offer, the device's answer.
   auto seed_map = [&]() {
-    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), held);
+    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), {});
     if (seed.first_ids.empty()) return;
     proto::SubmapSeed m;
     m.batch_id = next_batch++;
@@ -292,7 +287,6 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     for (std::size_t k = 0; k < m.count; ++k) {
       ids[k] = a.pairs[k].feature_id;
       if (ids[k] < 0) continue;
-      hold(ids[k]);
       const auto first = static_cast<std::size_t>(seed.first_ids[k]);
       scorer.added(ids[k], first < id_truth.size() ? id_truth[first] : RunScorer::kUnknown);
     }
@@ -317,7 +311,6 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     scorer.score(f.truth, paired);
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
-      if (q.feature_id >= 0) hold(q.feature_id);
       if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
       not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
     }
