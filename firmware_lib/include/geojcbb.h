@@ -35,7 +35,7 @@ extern "C" {
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
 #define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28784
-#define GEOJCBB_SLAM_STORAGE_SIZE 122784
+#define GEOJCBB_SLAM_STORAGE_SIZE 122816
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */

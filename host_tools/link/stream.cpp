@@ -232,13 +232,17 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
   // The seed (SUBMAP_SEED before each batch) around where the robot was at the last reply (the
-  // world's frame). The host holds nothing back as "held": it does not see the device remove a
-  // landmark by its evidence, so the device decides. A seed compatible with a landmark it holds is
-  // refused, once (not offered again to this map); one whose landmark it removed, it takes.
+  // world's frame), less the global landmarks the local map holds (`held`, as in process: the filter's
+  // ids). The replies say what it holds: the landmarks carried into it (SUBMAP's flags), the seeds it
+  // took and the landmarks it made, less those POSE names removed. A scan that removed more than
+  // POSE names leaves it unknown until the next map: then nothing is held back and the device
+  // decides (a seed compatible with a landmark it holds is refused, once).
   if (o.submap_seed && (!global || window != 1)) {
     throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
   }
   Eigen::Vector2d here(src.x0.x, src.x0.y);
+  std::vector<FeatureId> held;
+  bool held_known = true;
   auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
     for (const RunInput& in : ins) {
       last_pose = moved(last_pose, in);
@@ -260,12 +264,18 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);
+    held.clear();  // the next map begins with the carried ones
+    for (std::size_t k = 0; k < m.ids.size(); ++k) {
+      if (k < m.carried.size() && m.carried[k]) held.push_back(m.ids[k]);
+    }
+    held_known = true;
     res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   };
 
   // The seed of the current local map before a batch: the global map's offer, the device's answer.
   auto seed_map = [&]() {
-    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), {});
+    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame),
+                                   held_known ? held : std::vector<FeatureId>{});
     if (seed.first_ids.empty()) return;
     proto::SubmapSeed m;
     m.batch_id = next_batch++;
@@ -287,6 +297,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     for (std::size_t k = 0; k < m.count; ++k) {
       ids[k] = a.pairs[k].feature_id;
       if (ids[k] < 0) continue;
+      held.push_back(ids[k]);
       const auto first = static_cast<std::size_t>(seed.first_ids[k]);
       scorer.added(ids[k], first < id_truth.size() ? id_truth[first] : RunScorer::kUnknown);
     }
@@ -311,7 +322,10 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     scorer.score(f.truth, paired);
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
-      if (q.outcome == proto::PairingOutcome::kNewLandmark) scorer.added(q.feature_id, f.truth[i]);
+      if (q.outcome == proto::PairingOutcome::kNewLandmark) {
+        scorer.added(q.feature_id, f.truth[i]);
+        held.push_back(q.feature_id);
+      }
       not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
     }
     const auto& u = r.pose.cov_upper;
@@ -320,6 +334,10 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     Pose2<double> x{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
     if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
     here = Eigen::Vector2d(x.x, x.y);
+    held_known = held_known && r.pose.removed == r.pose.count;
+    for (std::size_t k = 0; k < r.pose.count; ++k) {
+      held.erase(std::remove(held.begin(), held.end(), r.pose.ids[k].feature_id), held.end());
+    }
     if (f.have_truth) scorer.pose(f.t_s, f.true_pose, x, P);
     if (o.record_trace) {
       trace_moves(f.moves);

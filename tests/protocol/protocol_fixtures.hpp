@@ -186,6 +186,10 @@ inline Pose sample<Pose>() {
   p.theta_rad = -1.0f;
   p.cov_upper = {0.1f, 0.01f, 0.0f, 0.2f, -0.01f, 0.03f};
   p.landmark_count = 17;
+  p.removed = 2;  // the scan removed two landmarks, named
+  p.count = 2;
+  p.ids[0].feature_id = 5;
+  p.ids[1].feature_id = 9;
   return p;
 }
 template <>

@@ -444,6 +444,16 @@ TEST_CASE("protocol: ranges and positive definiteness") {
     Pose p = sample<Pose>();
     p.cov_upper[3] = -0.1f;
     rejects(p, Error::kOutOfRange);
+    p = sample<Pose>();
+    p.ids[1].feature_id = -1;  // an id is >= 0
+    rejects(p, Error::kOutOfRange);
+    p = sample<Pose>();
+    p.removed = 3;  // three removed, two named: the list must name min(removed, 8)
+    rejects(p, Error::kOutOfRange);
+    p.removed = 30;  // more than a POSE names: the first 8, counted
+    p.count = 8;
+    for (std::size_t k = 0; k < kRemovedPerPose; ++k) p.ids[k].feature_id = static_cast<std::int32_t>(k);
+    rejects(p, Error::kOk);
     Capabilities c = sample<Capabilities>();
     c.scalar_bytes = 5;
     rejects(c, Error::kOutOfRange);

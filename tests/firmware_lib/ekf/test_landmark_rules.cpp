@@ -436,3 +436,32 @@ TEST_CASE_TEMPLATE(
     CHECK(refused == 1);
   }
 }
+
+TEST_CASE_TEMPLATE("removed landmarks are named: the first 8 ids in order, all counted, until cleared", T, float,
+                   double) {
+  // What a device's POSE reports (the host's seed leaves out what the local map still holds).
+  auto r = std::make_unique<Rig<T>>();
+  REQUIRE(r->slam.reset(Pose2<T>{}, Mat3<T>::Identity() * T(1e-6)) == Status::kOk);
+  const Mat2<T> R = Mat2<T>(Vec2<T>(T(0.02 * 0.02), T(0.005 * 0.005)).asDiagonal());
+  FeatureId ids[12];
+  for (int k = 0; k < 12; ++k) {
+    REQUIRE(r->slam.augment(Vec2<T>(T(4) + T(0.5) * T(k), T(0.05) * T(k)), R, ids[k]) == Status::kOk);
+  }
+  CHECK(r->slam.removed().count == 0);
+  // A restart keeps landmarks 3 and 7: ten removed, the first eight named in order.
+  std::int16_t keep[LB::kMaxLandmarks] = {3, 7};
+  REQUIRE(r->slam.restart(Mat3<T>::Identity() * T(1e-6), keep, 2) == Status::kOk);
+  const RemovedIds& gone = r->slam.removed();
+  CHECK(gone.count == 10);
+  const FeatureId named[RemovedIds::kMaxIds] = {ids[0], ids[1], ids[2], ids[4], ids[5], ids[6], ids[8], ids[9]};
+  for (int k = 0; k < RemovedIds::kMaxIds; ++k) CHECK(gone.ids[static_cast<std::size_t>(k)] == named[k]);
+  r->slam.clear_removed();
+  CHECK(r->slam.removed().count == 0);
+  // Another rule, the same report: an eviction names the landmark it removes.
+  FeatureId evicted = -1;
+  REQUIRE(r->slam.evict(T(1), evicted) == Status::kOk);
+  CHECK(r->slam.removed().count == 1);
+  CHECK(r->slam.removed().ids[0] == evicted);
+  CHECK((evicted == ids[3] || evicted == ids[7]));
+  CHECK(r->slam.landmarks() == 1);
+}

@@ -143,6 +143,15 @@ struct LandmarkRecord {
 // The device's RAM budget counts on it (GEOJCBB_SLAM_STORAGE_SIZE): no padding.
 static_assert(sizeof(LandmarkRecord<float>) == 36, "LandmarkRecord<float>: 36 bytes of members, no padding");
 
+/// The landmarks removed since LandmarkBook::clear_removed(), by every rule (the review, a merge, an
+/// eviction, a restart): how many, and the ids of the first kMaxIds of them. A device reports a
+/// scan's in POSE, so the host knows which landmarks the local map still holds (docs/submaps.md).
+struct RemovedIds {
+  static constexpr int kMaxIds = 8;
+  std::array<FeatureId, kMaxIds> ids{};
+  std::uint16_t count = 0;  ///< all removed (saturating at 65535); ids holds min(count, kMaxIds)
+};
+
 /// @tparam T             scalar of the records
 /// @tparam MaxLandmarks  capacity
 template <typename T, int MaxLandmarks>
@@ -155,7 +164,11 @@ class LandmarkBook {
   void clear() {
     n_ = 0;
     next_id_ = 0;
+    clear_removed();
   }
+  /// The landmarks removed since clear_removed().
+  const RemovedIds& removed() const { return removed_; }
+  void clear_removed() { removed_.count = 0; }
   int size() const { return n_; }
   /// The id the next landmark gets (ids grow and are never reused).
   FeatureId next_id() const { return next_id_; }
@@ -267,13 +280,23 @@ class LandmarkBook {
   }
   /// Keeps the records keep[0 .. kept) (increasing), in that order; the others are removed.
   /// Every source index is at or after its destination, so nothing is overwritten before it is read.
+  /// The removed ones are noted (removed()).
   void retain(const std::int16_t (&keep)[MaxLandmarks], int kept) {
+    for (int j = 0, k = 0; j < n_; ++j) {  // <= MaxLandmarks: the ones not kept, in order
+      if (k < kept && keep[k] == j) {
+        ++k;
+        continue;
+      }
+      if (removed_.count < RemovedIds::kMaxIds) removed_.ids[removed_.count] = rec_[j].id;
+      if (removed_.count < 65535) ++removed_.count;
+    }
     for (int k = 0; k < kept; ++k) rec_[k] = rec_[keep[k]];  // <= MaxLandmarks
     n_ = kept;
   }
 
  private:
   std::array<LandmarkRecord<T>, MaxLandmarks> rec_{};
+  RemovedIds removed_{};
   FeatureId next_id_ = 0;
   int n_ = 0;
 };

@@ -303,6 +303,9 @@ class Slam {
   bool has_moved(int j, T gate_d2) const { return gate_d2 > T(0) && moved(j, gate_d2); }
   /// Landmark j's log-odds of existence has reached the confirm threshold (LandmarkPolicy), or it is known.
   bool confirmed(int j) const { return book_.confirmed(j); }
+  /// The landmarks removed since clear_removed(), by every rule (a device reports a scan's in POSE).
+  const RemovedIds& removed() const { return book_.removed(); }
+  void clear_removed() { book_.clear_removed(); }
   /// Landmark j's log-odds of existence [nats] (LandmarkPolicy).
   T existence(int j) const { return book_.existence(j); }
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).

@@ -492,6 +492,11 @@ class Node {
     p.cov_upper = {static_cast<float>(s.cov(0, 0)), static_cast<float>(s.cov(0, 1)), static_cast<float>(s.cov(0, 2)),
                    static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
     p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
+    const ekf::RemovedIds& gone = s.removed();
+    static_assert(ekf::RemovedIds::kMaxIds == static_cast<int>(proto::kRemovedPerPose), "POSE names them all");
+    p.removed = gone.count;
+    p.count = static_cast<std::uint8_t>(gone.count < proto::kRemovedPerPose ? gone.count : proto::kRemovedPerPose);
+    for (std::size_t k = 0; k < p.count; ++k) p.ids[k].feature_id = gone.ids[k];  // <= kRemovedPerPose
     handing_over_ = last_.submap_due;
     p.submap_frames =
         handing_over_ ? static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(s.landmarks()))) : 0;

@@ -199,6 +199,7 @@ class SlamStep {
                             const AssociationOverride<T, B>* override = nullptr) {
     if (!configured_) return Status::kInvalidInput;
     const std::uint32_t t0 = clock ? clock() : 0;
+    slam_.clear_removed();  // what this step removes (POSE reports it)
     if (scans_in_map_ < std::numeric_limits<int>::max()) ++scans_in_map_;
     out.submap_due = false;
     scratch_.ws.score = {clock, 0};  // the posterior scoring's count (set_log_likelihood)

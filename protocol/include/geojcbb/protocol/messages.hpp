@@ -574,12 +574,27 @@ struct AssocResultT : Codec<AssocResultT<MaxObs>> {
 };
 using AssocResult = AssocResultT<>;
 
+/// A landmark a scan removed (POSE's list).
+struct RemovedWire {
+  std::int32_t feature_id = 0;
+
+  static constexpr auto fields() {
+    return std::make_tuple(field("feature_id", &RemovedWire::feature_id, range::at_least(0), "",
+                                 "the id of a landmark this scan removed (ids are never reused)"));
+  }
+};
+
+/// Removed landmarks' ids per POSE: more removed in one scan are counted (`removed`), not named.
+constexpr std::size_t kRemovedPerPose = 8;
+
 /// POSE, device -> host: the filter's pose after a batch. The covariance is what the filter holds:
 /// finite with a non-negative diagonal (the host judges consistency, for example NEES, itself).
+/// The landmarks the scan removed (by their evidence, a merge, an eviction): how many, and the first
+/// kRemovedPerPose ids, so the host knows what the local map still holds (docs/submaps.md, the seed).
 struct Pose : Codec<Pose> {
   static constexpr MsgType kType = MsgType::kPose;
   static constexpr const char* kName = "POSE";
-  static constexpr const char* kRule = "diagonal>=0";
+  static constexpr const char* kRule = "diagonal>=0,count=min(removed,8)";
 
   std::uint32_t batch_id = 0;
   float x_m = 0.0f;  ///< world frame
@@ -590,6 +605,9 @@ struct Pose : Codec<Pose> {
   /// 0, or this scan closed the local map: this many SUBMAP and SUBMAP_COV frames follow, and the
   /// device takes no stream frame (ERROR kBusy) until SUBMAP_ACK.
   std::uint16_t submap_frames = 0;
+  std::uint16_t removed = 0;  ///< landmarks this scan removed (saturating)
+  std::uint8_t count = 0;     ///< of them, named in ids: min(removed, kRemovedPerPose)
+  std::array<RemovedWire, kRemovedPerPose> ids{};
 
   static constexpr auto fields() {
     return std::make_tuple(
@@ -602,10 +620,15 @@ struct Pose : Codec<Pose> {
         field("landmark_count", &Pose::landmark_count),
         field("submap_frames", &Pose::submap_frames, range::any(), "frames",
               "0, or the local map closed with this scan: this many SUBMAP and SUBMAP_COV frames follow, and "
-              "stream frames get ERROR `kBusy` until SUBMAP_ACK"));
+              "stream frames get ERROR `kBusy` until SUBMAP_ACK"),
+        field("removed", &Pose::removed, range::any(), "",
+              "landmarks this scan removed (by their evidence, a merge or an eviction), saturating"),
+        list("count", &Pose::count, &Pose::ids, "ids", "min(`removed`, 8): the first removed landmarks' ids"));
   }
   [[nodiscard]] Error rule() const {
-    return (cov_upper[0] >= 0.0f && cov_upper[3] >= 0.0f && cov_upper[5] >= 0.0f) ? Error::kOk : Error::kOutOfRange;
+    const bool diagonal = cov_upper[0] >= 0.0f && cov_upper[3] >= 0.0f && cov_upper[5] >= 0.0f;
+    const std::size_t named = removed < kRemovedPerPose ? removed : kRemovedPerPose;
+    return diagonal && count == named ? Error::kOk : Error::kOutOfRange;
   }
 };
 
@@ -956,11 +979,11 @@ static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 160 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
-                  OdomDelta::kPayloadSize == 36 && Pose::kPayloadSize == 44 && Stats::kPayloadSize == 96 &&
-                  ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 && AssocResult::kFixedSize == 5 &&
-                  AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 && Submap::kItemSize == 18 &&
-                  SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 && SubmapAck::kPayloadSize == 5 &&
-                  SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 24,
+                  OdomDelta::kPayloadSize == 36 && Pose::kFixedSize == 47 && Pose::kItemSize == 4 &&
+                  Stats::kPayloadSize == 96 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
+                  AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 &&
+                  Submap::kItemSize == 18 && SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 &&
+                  SubmapAck::kPayloadSize == 5 && SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 24,
               "payload sizes of version 1 (docs/protocol.md)");
 
 }  // namespace geojcbb::proto
