@@ -794,8 +794,8 @@ TEST_CASE("node: POSE names exactly the landmarks its scan removed") {
   h.send(m);
   std::size_t named = 0;
   for (int k = 1; k < 12; ++k) {
-    std::vector<FeatureId> before;
-    for (int j = 0; j < s.landmarks(); ++j) before.push_back(s.id(j));
+    std::vector<FeatureId> before(static_cast<std::size_t>(s.landmarks()));
+    for (int j = 0; j < s.landmarks(); ++j) before[static_cast<std::size_t>(j)] = s.id(j);
     h.out.clear();
     h.send(test_odometry());
     h.send(test_batch(k));
