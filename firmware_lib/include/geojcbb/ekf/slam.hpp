@@ -14,7 +14,8 @@
 //                   "Covariance engine"); scratch O(n); optionally linearised at another point
 //                   (`at`, an iterated step) and in rounds (`rounds`, a closure's most certain first) O(n^2 p)
 //   update_alone:   one pair that moves only its landmark (a Schmidt update, tentative landmarks) O(n)
-//   augment / add_known_landmark: a new landmark from the inverse model, or a known one       O(n)
+//   augment / add_known_landmark / seed_landmark: a new landmark from the inverse model, a known
+//                   one, or one of the global map                                           O(n)
 //   review, duplicate_d2, merge, evict: the map's upkeep (ekf/map_upkeep.hpp): landmark
 //                   bookkeeping (the book's rules, LandmarkPolicy, and the static gate on x and P):
 //                   each landmark's log-odds of existence grows with pairings and falls with misses
@@ -22,6 +23,10 @@
 //                   one at the delete threshold is removed (marginalised: x and P compacted, which
 //                   is exact for an EKF); a duplicate merged;
 //                   the least-seen landmark beyond r + d evicted from a full map            O(n^2)
+// Where each is defined: reset, restart, relocalise, relocalise_fitted, inflate_pose and the
+// accessors here; predict and predict_local in ekf/slam_predict.hpp; update and update_alone in
+// ekf/slam_update.hpp; augment, add_known_landmark and seed_landmark in ekf/slam_augment.hpp; the
+// upkeep in ekf/map_upkeep.hpp. Each is declared and documented in the class below.
 // First-estimates Jacobians (Huang, Mourikis, Roumeliotis, ICRA 2008; FilterOptions): the
 // measurement Jacobians use each landmark's first estimate, and the first prediction after an
 // update uses the pose before that update, so the filter gains no information along the directions
@@ -339,18 +344,7 @@ class Slam {
   ///         for dt < 0 or a negative standard deviation. No state changes unless kOk.
   /// Out of line (as apply_motion): the Jacobians stay out of the caller's frame (Node::handle's,
   /// on the stack budget's deepest call chain).
-  [[nodiscard, gnu::noinline]] Status predict(const Odometry<T>& u) {
-    if (!std::isfinite(u.v_mps) || !std::isfinite(u.w_radps) || !std::isfinite(u.dt_s) ||
-        !std::isfinite(u.sigma_v_mps) || !std::isfinite(u.sigma_w_radps)) {
-      return Status::kNonFinite;
-    }
-    if (u.dt_s < T(0) || u.sigma_v_mps < T(0) || u.sigma_w_radps < T(0)) return Status::kInvalidInput;
-    Mat3<T> F;
-    Mat32<T> G;
-    const Pose2<T> next = move(pose(), u, &F, &G);
-    const Mat2<T> Q = Vec2<T>(u.sigma_v_mps * u.sigma_v_mps, u.sigma_w_radps * u.sigma_w_radps).asDiagonal();
-    return apply_motion(next, F, G * Q * G.transpose());
-  }
+  [[nodiscard, gnu::noinline]] Status predict(const Odometry<T>& u);
 
   /// The motion of one interval given as a pose increment in the robot's frame with its covariance
   /// (ekf::compose): the pose moved, its covariance F P F^T + J Q J^T, the pose-landmark blocks F P.
@@ -358,50 +352,12 @@ class Slam {
   ///         increment covariance that is not symmetric positive semi-definite (is_psd3);
   ///         kNotPositiveDefinite when the new pose block is not positive definite. Nothing changes
   ///         unless kOk.  O(n)
-  [[nodiscard]] Status predict(const PoseIncrement<T>& u) {
-    if (!std::isfinite(u.dx_m) || !std::isfinite(u.dy_m) || !std::isfinite(u.dtheta_rad) || !u.cov.allFinite()) {
-      return Status::kNonFinite;
-    }
-    if (!is_psd3(u.cov)) return Status::kNotPositiveDefinite;
-    Mat3<T> F, J;
-    const Pose2<T> next = compose(pose(), u, &F, &J);
-    return apply_motion(next, F, J * symmetric_part(u.cov) * J.transpose());
-  }
+  [[nodiscard]] Status predict(const PoseIncrement<T>& u);
 
  private:
   /// predict()'s common part: the pose moves to `next` with Jacobian F and process noise Qx (in
   /// the world frame); F's heading column taken from the pose before the last update (FEJ).
-  [[nodiscard, gnu::noinline]] Status apply_motion(const Pose2<T>& next, Mat3<T> F, const Mat3<T>& Qx) {
-    if (options_.first_estimates_jacobians && updated_) {
-      // FEJ: the displacement from the pose before the last update, not from the updated pose.
-      F(0, 2) -= x_[1] - prior_[1];
-      F(1, 2) += x_[0] - prior_[0];
-    }
-    const Mat3<T> Prr = F * P_.template block<3, 3>(0, 0) * F.transpose() + Qx;
-    // Finite inputs can still overflow (speeds or sigmas near the scalar's max): check the new
-    // pose and covariance before writing any of them.
-    if (!std::isfinite(next.x) || !std::isfinite(next.y) || !std::isfinite(next.theta) || !Prr.allFinite()) {
-      return Status::kNonFinite;
-    }
-    // Finite but singular by rounding (a sigma near 1e19 in float: the motion noise swamps the
-    // pose's own covariance, and the correlation of x and y, both driven by one sigma_v, rounds to
-    // 1): refused, nothing changed (fuzz_associate's finding).
-    const Mat3<T> Prr_sym = symmetric_part(Prr);
-    if (!is_spd_scaled<T>(Prr_sym)) return Status::kNotPositiveDefinite;
-    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks
-      if (!(F * P_.template block<3, 2>(0, Layout::landmark(j))).allFinite()) return Status::kNonFinite;
-    }
-    P_.template set_sym<3>(0, Prr_sym);
-    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks: only the pose rows change, O(n)
-      const int l = Layout::landmark(j);
-      P_.template set_block<3, 2>(0, l, F * P_.template block<3, 2>(0, l));
-    }
-    x_[0] = next.x;
-    x_[1] = next.y;
-    x_[2] = next.theta;
-    updated_ = false;
-    return Status::kOk;
-  }
+  [[nodiscard, gnu::noinline]] Status apply_motion(const Pose2<T>& next, Mat3<T> F, const Mat3<T>& Qx);
 
  public:
   /// The association input for the current scan: the landmarks with predicted range < radius_m
@@ -416,92 +372,7 @@ class Slam {
   /// @return kOk; kInvalidInput for a radius that is not positive and finite, or a half field of
   /// view outside (0, pi].
   [[nodiscard]] Status predict_local(T radius_m, SlamWorkspace<T, B>& ws, Prediction<T, B>& out, LocalMapStats& stats,
-                                     bool confirmed_first = false, T half_fov_rad = kPi<T>) const {
-    if (!(std::isfinite(radius_m) && radius_m > T(0))) return Status::kInvalidInput;
-    if (!(half_fov_rad > T(0) && half_fov_rad <= kPi<T>)) return Status::kInvalidInput;
-    auto& idx = ws.cand;
-    auto& rng = ws.cand_range;
-    auto& Hp = ws.cand_Hp;
-    auto& Hl = ws.cand_Hl;
-    int n = 0;
-    stats = LocalMapStats{};
-    const Pose2<T> xr = pose();
-    // Behind: cos(bearing) < cos((half_fov + pi) / 2) = -sin(half_fov / 2); ranked after every
-    // landmark in view (its range + radius_m).
-    const T back_cos = -fmath::sin(half_fov_rad / T(2));
-    const Vec2<T> ahead(fmath::cos(xr.theta), fmath::sin(xr.theta));
-    for (int j = 0; j < landmarks(); ++j) {  // <= kMaxLandmarks; insertion keeps the nearest kMaxCandidates
-      const Vec2<T> d = landmark(j) - Vec2<T>(xr.x, xr.y);
-      const T dist = d.norm();
-      if (!(dist < radius_m) || !(dist > T(0))) continue;
-      const T r = d.dot(ahead) < back_cos * dist ? dist + radius_m : dist;
-      ++stats.in_region;
-      int k = n;
-      if (n < B::kMaxCandidates) {
-        ++n;
-      } else {
-        stats.truncated = true;
-        if (!(r < rng[n - 1])) continue;  // farther than every kept candidate
-        k = n - 1;                        // the farthest kept candidate makes room
-      }
-      for (; k > 0 && rng[k - 1] > r; --k) {  // <= kMaxCandidates
-        rng[k] = rng[k - 1];
-        idx[k] = idx[k - 1];
-      }
-      rng[k] = r;
-      idx[k] = static_cast<std::uint16_t>(j);
-    }
-    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates: the kept ones by range (behind ones in place)
-      if (rng[a] >= radius_m) rng[a] -= radius_m;
-    }
-    for (int a = 1; a < n; ++a) {  // <= kMaxCandidates, insertion sort: O(kMaxCandidates^2)
-      const T r = rng[a];
-      const std::uint16_t i = idx[a];
-      int k = a;
-      for (; k > 0 && rng[k - 1] > r; --k) {  // <= kMaxCandidates
-        rng[k] = rng[k - 1];
-        idx[k] = idx[k - 1];
-      }
-      rng[k] = r;
-      idx[k] = i;
-    }
-    stats.confirmed = n;
-    if (confirmed_first) {  // stable partition, the confirmed first
-      std::uint16_t tentative[B::kMaxCandidates];
-      int c = 0, t = 0;
-      for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-        if (book_.confirmed(idx[a])) {
-          idx[c++] = idx[a];
-        } else {
-          tentative[t++] = idx[a];
-        }
-      }
-      for (int a = 0; a < t; ++a) idx[c + a] = tentative[a];  // <= kMaxCandidates
-      stats.confirmed = c;
-    }
-    const Status sized = out.C.resize(n);  // n <= kMaxCandidates by the insertion above
-    if (sized != Status::kOk) return sized;
-    out.count = n;
-    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-      out.id[a] = id(idx[a]);
-      out.h[a] = observe(xr, mount_, landmark(idx[a]));
-      observe(xr, mount_, linearisation_point(idx[a]), &Hp[a], &Hl[a]);
-    }
-    const Mat3<T> Prr = P_.template block<3, 3>(0, 0);
-    for (int a = 0; a < n; ++a) {  // <= kMaxCandidates
-      const int la = Layout::landmark(idx[a]);
-      // Row a of H P: the 2 x 3 pose part and, per b, the 2 x 2 landmark part.
-      const Mat23<T> HPr = Hp[a] * Prr + Hl[a] * P_.template block<3, 2>(0, la).transpose();  // P_lr = P_rl^T
-      for (int b = 0; b <= a; ++b) {                                                          // <= kMaxCandidates
-        const int lb = Layout::landmark(idx[b]);
-        const Mat2<T> HPl = Hp[a] * P_.template block<3, 2>(0, lb) + Hl[a] * P_.template block<2, 2>(la, lb);
-        Mat2<T> Cab = HPr * Hp[b].transpose() + HPl * Hl[b].transpose();
-        if (a == b) Cab = symmetric_part(Cab);
-        out.C.set_block(a, b, Cab);  // block (b, a) = Cab^T: C is stored as its lower block triangle
-      }
-    }
-    return Status::kOk;
-  }
+                                     bool confirmed_first = false, T half_fov_rad = kPi<T>) const;
 
   /// One batch update with every paired observation of `assoc` (feature ids are landmark ids).
   /// @return kOk (also with no pairs); kInvalidInput for a count mismatch or an unknown landmark;
@@ -519,149 +390,7 @@ class Slam {
   /// this_round; a loop closure's pairs applied in rounds, most certain first, each round
   /// linearised at the estimate the rounds before it left (node::SlamStep::step).
   [[nodiscard]] Status update(const Observations<T, B>& obs, const Association<T, B>& assoc, SlamWorkspace<T, B>& ws,
-                              const Pose2<T>* at = nullptr, const std::uint8_t* rounds = nullptr, int this_round = 0) {
-    if (assoc.count != obs.count || obs.count < 0 || obs.count > B::kMaxObservations) {
-      return Status::kInvalidInput;
-    }
-    if (at != nullptr && !(std::isfinite(at->x) && std::isfinite(at->y) && std::isfinite(at->theta))) {
-      return Status::kNonFinite;
-    }
-    int p = 0;
-    const Pose2<T> xr = at != nullptr ? Pose2<T>{at->x, at->y, wrap_angle(at->theta)} : pose();
-    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
-      const FeatureId f = assoc.feature[i];
-      if (f < 0 || (rounds != nullptr && rounds[i] != this_round)) continue;
-      const int j = index_of(f);
-      if (j < 0) return Status::kInvalidInput;
-      if (!obs.z[i].allFinite() || !obs.R[i].allFinite()) return Status::kNonFinite;
-      if (!is_spd(obs.R[i])) return Status::kNotPositiveDefinite;
-      const Vec2<T> h = observe(xr, mount_, landmark(j));
-      observe(xr, mount_, linearisation_point(j), &ws.Hp[p], &ws.Hl[p]);
-      const Vec2<T> nu = innovation(obs.z[i], h);
-      ws.nu[2 * p] = nu.x();
-      ws.nu[2 * p + 1] = nu.y();
-      ws.obs[p] = static_cast<std::int16_t>(i);
-      ws.lm[p] = static_cast<std::int16_t>(j);
-      ws.l0[p] = landmark(j);
-      ++p;
-    }
-    ws.rejected_blocks = 0;
-    ws.floored_variances = 0;
-    if (p == 0) return Status::kOk;
-    const int n = dim();
-    const T pose0[3] = {xr.x, xr.y, xr.theta};  // the linearisation pose
-    constexpr int G = kUpdateBlockPairs;
-    constexpr int K = kUpdateBlockCols;
-    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
-    // Sequential blocks of G pairs, every one linearised where the batch is (design.md, "Covariance
-    // engine"): with S = L L^T of the whole batch, the block's Schur complement is its diagonal
-    // block of L, which the block's S from the already-updated P equals; so the blocks together are
-    // the batch update x <- x + W L^-1 nu, P <- P - W W^T, W = P H^T L^-T, and need O(n) scratch.
-    for (int b0 = 0; b0 < p; b0 += G) {       // <= ceil(kMaxObservations / G) blocks
-      const int q = p - b0 < G ? p - b0 : G;  // pairs in this block
-      const int k = 2 * q;                    // rows of H_b
-      // A = P H_b^T, K columns (the unused ones of a short block zero).  O(n)
-      for (int r = 0; r < n; ++r) {  // <= kMaxState
-        const T pr0 = cov(r, 0), pr1 = cov(r, 1), pr2 = cov(r, 2);
-        for (int a = 0; a < G; ++a) {
-          if (a >= q) {
-            V(r, 2 * a) = T(0);
-            V(r, 2 * a + 1) = T(0);
-            continue;
-          }
-          const int l = Layout::landmark(ws.lm[b0 + a]);
-          const T pl0 = cov(r, l), pl1 = cov(r, l + 1);
-          const Mat23<T>& Hp = ws.Hp[b0 + a];
-          const Mat2<T>& Hl = ws.Hl[b0 + a];
-          for (int u = 0; u < 2; ++u) {
-            V(r, 2 * a + u) = Hp(u, 0) * pr0 + Hp(u, 1) * pr1 + Hp(u, 2) * pr2 + Hl(u, 0) * pl0 + Hl(u, 1) * pl1;
-          }
-        }
-      }
-      // S_b = H_b A + R_b (lower triangle) and the block's innovation at the linearisation point:
-      // nu - H (x - x0), x0 the state before the first block (H touches the pose and one landmark).
-      T L[K][K] = {};
-      T w[K] = {};
-      for (int a = 0; a < q; ++a) {
-        const int pa = b0 + a;
-        const int la = Layout::landmark(ws.lm[pa]);
-        const Vec2<T> dl = landmark(ws.lm[pa]) - ws.l0[pa];
-        const T dp[3] = {x_[0] - pose0[0], x_[1] - pose0[1], wrap_angle(x_[2] - pose0[2])};
-        for (int u = 0; u < 2; ++u) {
-          const int row = 2 * a + u;
-          for (int col = 0; col <= row; ++col) {  // <= K
-            T s = T(0);
-            for (int t = 0; t < 3; ++t) s += ws.Hp[pa](u, t) * V(t, col);
-            for (int t = 0; t < 2; ++t) s += ws.Hl[pa](u, t) * V(la + t, col);
-            if (col / 2 == a) s += obs.R[ws.obs[pa]](u, col % 2);
-            L[row][col] = s;
-          }
-          T h = T(0);
-          for (int t = 0; t < 3; ++t) h += ws.Hp[pa](u, t) * dp[t];
-          for (int t = 0; t < 2; ++t) h += ws.Hl[pa](u, t) * dl(t);
-          w[row] = ws.nu[2 * pa + u] - h;
-        }
-      }
-      bool spd = true;
-      for (int j = 0; j < k && spd; ++j) {  // <= K: in-place Cholesky
-        T d = L[j][j];
-        for (int t = 0; t < j; ++t) d -= L[j][t] * L[j][t];
-        spd = d > T(0) && std::isfinite(d);
-        if (!spd) break;
-        L[j][j] = std::sqrt(d);
-        for (int i = j + 1; i < k; ++i) {  // <= K
-          T s = L[i][j];
-          for (int t = 0; t < j; ++t) s -= L[i][t] * L[j][t];
-          L[i][j] = s / L[j][j];
-        }
-      }
-      for (int r = 0; r < n && spd; ++r) {  // V <- A L^-T (per row);  <= kMaxState
-        for (int i = 0; i < k; ++i) {       // <= K
-          T v = V(r, i);
-          for (int t = 0; t < i; ++t) v -= L[i][t] * V(r, t);
-          V(r, i) = v / L[i][i];
-        }
-      }
-      // S positive definite is not enough in floating point: a pose variance many orders above the
-      // landmark's (float, 1e6 against 1e-2) loses every digit in P - V V^T, and the result can be
-      // indefinite (fuzz_node's finding). The entries that define the filter's guarantees, the pose
-      // block and each landmark's 2x2 block, are computed as the downdate will write them and checked
-      // first.  O(n K)
-      if (spd) spd = downdate_keeps_blocks_definite(n, ws);
-      for (int i = 0; i < k && spd; ++i) {  // w <- L^-1 nu_b;  <= K
-        for (int t = 0; t < i; ++t) w[i] -= L[i][t] * w[t];
-        w[i] /= L[i][i];
-      }
-      // The new mean must be finite too: a finite innovation over a tiny S can overflow x + V w
-      // (fuzz_associate's finding). Checked with the arithmetic that writes it, before any write.
-      bool finite = true;
-      for (int r = 0; r < n && spd && finite; ++r) {  // <= kMaxState
-        T dx = T(0);
-        for (int i = 0; i < k; ++i) dx += V(r, i) * w[i];  // <= K
-        finite = std::isfinite(x_[r] + dx);
-      }
-      if (!spd || !finite) {
-        // The first block runs before any change: a refusal there changes nothing (the caller's S,
-        // or a P that cannot take the update in T). Later blocks are skipped, PX4-style.
-        if (b0 == 0) return spd ? Status::kNonFinite : Status::kNotPositiveDefinite;
-        ++ws.rejected_blocks;
-        continue;
-      }
-      if (b0 == 0 && !updated_) {  // nothing below can fail; the pose the next prediction linearises at (FEJ)
-        prior_[0] = x_[0];
-        prior_[1] = x_[1];
-        updated_ = true;
-      }
-      for (int r = 0; r < n; ++r) {  // x <- x + V w;  <= kMaxState
-        T dx = T(0);
-        for (int i = 0; i < k; ++i) dx += V(r, i) * w[i];  // <= K
-        x_[r] += dx;
-      }
-      x_[2] = wrap_angle(x_[2]);
-      P_.template downdate<K>(n, ws.V.data(), ws.floored_variances);
-    }
-    return Status::kOk;
-  }
+                              const Pose2<T>* at = nullptr, const std::uint8_t* rounds = nullptr, int this_round = 0);
 
   /// One observation z (noise R) of landmark j that moves only that landmark (a tentative one,
   /// node::SlamStep with tentative_isolated): a Schmidt (consider) update. S = H P H^T + R counts
@@ -676,56 +405,7 @@ class Slam {
   ///         for S or for a landmark block that rounding would leave not positive definite. No
   ///         state changes unless kOk.  O(n)
   [[nodiscard, gnu::noinline, gnu::cold]] Status update_alone(int j, const Vec2<T>& z, const Mat2<T>& R,
-                                                              SlamWorkspace<T, B>& ws, T& d2) {
-    if (j < 0 || j >= landmarks()) return Status::kInvalidInput;
-    if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
-    if (!is_spd(R)) return Status::kNotPositiveDefinite;
-    const int n = dim(), l = Layout::landmark(j);
-    Mat23<T> Hp;
-    Mat2<T> Hl;
-    const Pose2<T> xr = pose();
-    const Vec2<T> nu = innovation(z, observe(xr, mount_, landmark(j)));
-    observe(xr, mount_, linearisation_point(j), &Hp, &Hl);
-    // A = P H^T (n x 2), in the update's scratch (its first two columns).
-    constexpr int K = kUpdateBlockCols;
-    auto V = [&](int r, int c) -> T& { return ws.V[static_cast<std::size_t>(r) * K + c]; };
-    for (int r = 0; r < n; ++r) {  // <= kMaxState
-      for (int u = 0; u < 2; ++u) {
-        V(r, u) = Hp(u, 0) * cov(r, 0) + Hp(u, 1) * cov(r, 1) + Hp(u, 2) * cov(r, 2) + Hl(u, 0) * cov(r, l) +
-                  Hl(u, 1) * cov(r, l + 1);
-      }
-    }
-    Mat2<T> S;
-    for (int u = 0; u < 2; ++u) {
-      for (int v = 0; v < 2; ++v) {
-        S(u, v) = Hp(u, 0) * V(0, v) + Hp(u, 1) * V(1, v) + Hp(u, 2) * V(2, v) + Hl(u, 0) * V(l, v) +
-                  Hl(u, 1) * V(l + 1, v) + R(u, v);
-      }
-    }
-    S = symmetric_part(S);
-    const T det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-    if (!(S(0, 0) > T(0)) || !(det > T(0)) || !std::isfinite(det)) return Status::kNotPositiveDefinite;
-    Mat2<T> Si;
-    Si << S(1, 1) / det, -S(0, 1) / det, -S(1, 0) / det, S(0, 0) / det;
-    // K_l = (A's rows l, l + 1) S^-1; K_l S K_l^T = A_l S^-1 A_l^T.
-    Mat2<T> Al;
-    Al << V(l, 0), V(l, 1), V(l + 1, 0), V(l + 1, 1);
-    const Mat2<T> Kl = Al * Si;
-    const Mat2<T> Pll = symmetric_part(Mat2<T>(P_.template block<2, 2>(l, l) - Kl * Al.transpose()));
-    const Vec2<T> xl = landmark(j) + Kl * nu;
-    if (!xl.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    if (!spd_block(Pll)) return Status::kNotPositiveDefinite;
-    d2 = nu.dot(Si * nu);
-    // P_lo -= K_l (H P)_o = K_l A_o^T for every other row o (A_o: row o of P H^T).
-    for (int o = 0; o < n; ++o) {  // <= kMaxState
-      if (o == l || o == l + 1) continue;
-      for (int u = 0; u < 2; ++u) P_.at(l + u, o) -= Kl(u, 0) * V(o, 0) + Kl(u, 1) * V(o, 1);
-    }
-    P_.set_sym(l, Pll);
-    x_[l] = xl.x();
-    x_[l + 1] = xl.y();
-    return Status::kOk;
-  }
+                                                              SlamWorkspace<T, B>& ws, T& d2);
 
   /// Adds a landmark observed at z = (range, bearing) with noise R from the current pose.
   /// The landmark starts tentative with one hit and log-odds 0 (see LandmarkPolicy).
@@ -734,28 +414,7 @@ class Slam {
   ///         (also when the new landmark's mean or covariance would overflow); kInvalidInput for a
   ///         negative range; kNotPositiveDefinite for R (or a new block that rounding left not
   ///         positive definite). No state changes unless kOk.
-  [[nodiscard]] Status augment(const Vec2<T>& z, const Mat2<T>& R, FeatureId& id) {
-    if (!z.allFinite() || !R.allFinite()) return Status::kNonFinite;
-    if (z.x() < T(0)) return Status::kInvalidInput;
-    if (!is_spd(R)) return Status::kNotPositiveDefinite;
-    if (book_.full()) return Status::kCapacityExceeded;
-    Mat23<T> Jp;
-    Mat2<T> Jz;
-    const Vec2<T> l = inverse_observe(pose(), mount_, z, &Jp, &Jz);
-    const int n = dim();  // first row of the new landmark
-    // A finite z can still overflow (a range near the scalar's max): check the new mean and
-    // covariance before writing any of them.
-    const Mat2<T> Pll = Jp * P_.template block<3, 3>(0, 0) * Jp.transpose() + Jz * R * Jz.transpose();
-    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    // R at rounding's edge, or a block so elongated that it is singular in T (double, R near 1e123:
-    // the raw determinant rounds positive; fuzz_associate's finding): tested scale-free.
-    const Mat2<T> Pll_sym = symmetric_part(Pll);
-    if (!spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
-    if (!P_.correlated_finite(n, Jp)) return Status::kNonFinite;
-    P_.append_correlated(n, Jp, Pll_sym);  // P_lx = Jp P_rx, the new columns n, n + 1
-    id = add_landmark(l);
-    return Status::kOk;
-  }
+  [[nodiscard]] Status augment(const Vec2<T>& z, const Mat2<T>& R, FeatureId& id);
 
   /// Adds a landmark known beforehand (a surveyed map, localisation only): at l with covariance Pll,
   /// uncorrelated with the rest of the state. It starts with one hit, confirmed, and the evidence
@@ -763,15 +422,7 @@ class Slam {
   /// @param[out] id  the new landmark's id
   /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll; kCapacityExceeded. No state changes
   ///         unless kOk.
-  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id) {
-    if (!l.allFinite() || !Pll.allFinite()) return Status::kNonFinite;
-    const Mat2<T> Pll_sym = symmetric_part(Pll);
-    if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;  // as augment()
-    if (book_.full()) return Status::kCapacityExceeded;
-    P_.append_uncorrelated(dim(), Pll_sym);
-    id = add_landmark(l, true);
-    return Status::kOk;
-  }
+  [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id);
 
   /// A landmark of the global map given to this local map (docs/submaps.md, "Seed"; node::seed_map):
   /// at l in this map's frame with covariance Pll, uncorrelated with the pose and with every other
@@ -781,17 +432,7 @@ class Slam {
   /// @param[out] id  the new landmark's id
   /// @return kOk; kNonFinite; kNotPositiveDefinite for Pll (checked as augment() does);
   ///         kCapacityExceeded. No state changes unless kOk.  O(n)
-  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, T exist_nats, FeatureId& id) {
-    if (!l.allFinite() || !Pll.allFinite() || !std::isfinite(exist_nats)) return Status::kNonFinite;
-    const Mat2<T> Pll_sym = symmetric_part(Pll);
-    if (!is_spd(Pll) || !spd_block(Pll_sym)) return Status::kNotPositiveDefinite;
-    if (book_.full()) return Status::kCapacityExceeded;
-    P_.append_uncorrelated(dim(), Pll_sym);
-    id = add_landmark(l);
-    book_[landmarks() - 1].flags = kConfirmedFlag;
-    book_[landmarks() - 1].exist = exist_nats;
-    return Status::kOk;
-  }
+  [[nodiscard]] Status seed_landmark(const Vec2<T>& l, const Mat2<T>& Pll, T exist_nats, FeatureId& id);
 
   /// Landmark bookkeeping after a scan's update and augment: every landmark of `pred` (this scan's
   /// prediction) whose predicted measurement is in `view` was expected; paired by `assoc` (with
@@ -867,12 +508,7 @@ class Slam {
   [[gnu::noinline, gnu::cold]] void reanchor();
   /// Landmark index landmarks() at l, whose covariance columns are already set: its state and its
   /// record. @return its id
-  FeatureId add_landmark(const Vec2<T>& l, bool known = false) {
-    const int k = dim();
-    x_[k] = l.x();
-    x_[k + 1] = l.y();
-    return book_.add(l, P_.template block<2, 2>(k, k), known);
-  }
+  FeatureId add_landmark(const Vec2<T>& l, bool known = false);
   /// A pose and its covariance fit to start from: finite, P symmetric positive definite.
   /// @return kOk; kNonFinite; kNotSymmetric; kNotPositiveDefinite.
   [[nodiscard]] static Status check_pose_prior(const Pose2<T>& x0, const Mat3<T>& P0) {
@@ -890,24 +526,7 @@ class Slam {
   static bool spd_block(const Mat2<T>& m) { return is_spd_scaled<T>(m(0, 0), m(0, 1), m(1, 1)); }
   /// Whether P - V V^T (Covariance::downdated) keeps the pose block and every landmark's 2x2 block
   /// positive definite beyond rounding (is_spd_scaled). Reads only.  O(n K)
-  bool downdate_keeps_blocks_definite(int n, const SlamWorkspace<T, B>& ws) const {
-    constexpr int K = kUpdateBlockCols;
-    const T* v = ws.V.data();
-    Mat3<T> Prr;
-    for (int c = 0; c < 3; ++c) {
-      for (int r = 0; r <= c; ++r) {
-        Prr(r, c) = P_.template downdated<K>(r, c, v);
-        Prr(c, r) = Prr(r, c);
-      }
-    }
-    if (!is_spd_scaled<T>(Prr)) return false;
-    for (int l = Layout::landmark(0); l + 1 < n; l += 2) {  // <= kMaxLandmarks
-      if (!is_spd_scaled<T>(P_.template downdated<K>(l, l, v), P_.template downdated<K>(l, l + 1, v),
-                            P_.template downdated<K>(l + 1, l + 1, v)))
-        return false;
-    }
-    return true;
-  }
+  bool downdate_keeps_blocks_definite(int n, const SlamWorkspace<T, B>& ws) const;
 
   static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
@@ -921,5 +540,11 @@ class Slam {
 
 }  // namespace geojcbb::ekf
 
-// The map's upkeep (review, duplicate_d2, merge, evict, remove, moved), defined in its own file.
-#include "geojcbb/ekf/map_upkeep.hpp"  // IWYU pragma: export
+// The operations defined in files of their own, one concern each: the prediction (predict,
+// apply_motion, predict_local), the correction (update, update_alone), new landmarks (augment,
+// add_known_landmark, seed_landmark) and the map's upkeep (review, duplicate_d2, merge, evict,
+// remove, moved).
+#include "geojcbb/ekf/slam_predict.hpp"  // IWYU pragma: export
+#include "geojcbb/ekf/slam_update.hpp"   // IWYU pragma: export
+#include "geojcbb/ekf/slam_augment.hpp"  // IWYU pragma: export
+#include "geojcbb/ekf/map_upkeep.hpp"    // IWYU pragma: export

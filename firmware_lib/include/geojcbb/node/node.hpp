@@ -17,6 +17,7 @@
 //                   sends it again). SUBMAP_ACK: ACK, then the next map (SlamStep::restart); with
 //                   send, ACK and the same map again (or the current map, closed now: the end of a
 //                   run). RESET and CONFIG drop a pending map; a HELLO (a reconnection) keeps it.
+//                   SUBMAP_SEED seeds the local map. Defined in node/hand_over.hpp.
 //   retransmission  a stream frame (ODOMETRY, OBS_BATCH) whose seq is not newer than the last applied
 //                   one since CONFIG/RESET is not applied again; a repeated OBS_BATCH of the last
 //                   applied batch id gets its stored ASSOC_RESULT and POSE again (a host that lost
@@ -295,9 +296,7 @@ class Node {
 
   /// SUBMAP_SEED decoded out of line: its 204 B stay out of handle()'s frame, which is on the
   /// deepest call chain (the lost scan's alignment; docs/firmware.md, "Stack").
-  [[gnu::noinline, gnu::cold]] proto::Error serve_seed(const proto::FrameView& f) {
-    return serve<proto::SubmapSeed>(f);
-  }
+  [[gnu::noinline, gnu::cold]] proto::Error serve_seed(const proto::FrameView& f);
 
   void handle(const proto::FrameView& f) {
     rx_type_ = f.type;
@@ -510,146 +509,27 @@ class Node {
     }
   }
 
+  // The local map's hand-over (SUBMAP_SEED, SUBMAP_ACK, the SUBMAP and SUBMAP_COV frames), defined
+  // in node/hand_over.hpp.
   /// Out of line and cold: its seeds (224 B) stay out of handle()'s frame; the answers are a member
   /// (96 B), which keeps this frame within the 512-B limit (docs/firmware.md).
-  [[gnu::cold, gnu::noinline]] void on_message(const proto::SubmapSeed& m) {
-    if (!running()) return;
-    if (!fresh()) {  // retransmitted: seeded once; its answer again while it is the last one
-      if (have_result_ && m.batch_id == result_.batch_id) send(result_);
-      return;
-    }
-    if (busy()) return;
-    if (m.map_id != map_id_) {
-      invalid();
-      return;
-    }
-    MapSeed<T> seeds[kMaxSeeds];
-    for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
-      const proto::SeedWire& w = m.items[static_cast<std::size_t>(k)];
-      seeds[k].l << T(w.x_m), T(w.y_m);
-      seeds[k].P << T(w.p00), T(w.p01), T(w.p01), T(w.p11);
-      seeds[k].exist_nats = T(w.exist_nats);
-    }
-    if (step_.seed(seeds, m.count, seed_answers_) != Status::kOk) {
-      invalid();
-      return;
-    }
-    result_.batch_id = m.batch_id;
-    result_.count = m.count;
-    for (int k = 0; k < m.count; ++k) {  // <= kMaxSeeds
-      proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(k)];
-      q.outcome = static_cast<proto::PairingOutcome>(seed_answers_[k].outcome);
-      q.feature_id = seed_answers_[k].id;
-      q.d2 = static_cast<float>(seed_answers_[k].d2);
-    }
-    send(result_);
-    applied();
-    have_result_ = true;
-  }
+  [[gnu::cold, gnu::noinline]] void on_message(const proto::SubmapSeed& m);
 
-  [[gnu::cold]] void on_message(const proto::SubmapAck& m) {
-    if (!running()) return;
-    if (!handing_over_) {
-      if (m.send && m.map_id == map_id_) {  // the current map, closed now at this scan boundary
-        handing_over_ = true;
-        ack();
-        send_submap();
-      } else if (have_handed_ && m.map_id + 1 == map_id_ && !m.send) {  // the last map's again (its ACK lost)
-        ack();
-      } else {
-        nack(proto::Error::kOutOfRange);
-      }
-      return;
-    }
-    if (m.map_id != map_id_) {
-      nack(proto::Error::kOutOfRange);
-      return;
-    }
-    if (m.send) {  // frames lost, or a reconnection: the same map again, from the same memory
-      ack();
-      send_submap();
-      return;
-    }
-    if (step_.restart() != Status::kOk) {  // the map stays, pending: the host may ask for it again
-      nack(proto::Error::kInternal);
-      return;
-    }
-    handing_over_ = false;
-    have_handed_ = true;
-    ++map_id_;
-    ack();
-  }
+  /// SUBMAP_ACK: the closed map acknowledged (the next map begins), or asked for again.
+  [[gnu::cold]] void on_message(const proto::SubmapAck& m);
 
   /// The closed map as SUBMAP then SUBMAP_COV frames, read from the filter in place. Two functions out
   /// of line: each frame's message is on the stack of its own (within the 512-byte frame limit), out
   /// of handle()'s frame (docs/firmware.md).
   /// Bound: n / 16 + 1 + D (D + 1) / 192 + 1 frames for n landmarks, D = 3 + 2 n.
-  [[gnu::cold]] void send_submap() {
-    const std::uint16_t frames =
-        static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(step_.slam().landmarks())));
-    send_submap_cov(send_submap_landmarks(frames), frames);
-  }
+  [[gnu::cold]] void send_submap();
   /// The SUBMAP frames (chunks 0 ...); returns the next chunk's index.
-  [[gnu::noinline, gnu::cold]] std::uint16_t send_submap_landmarks(std::uint16_t frames) {
-    const ekf::Slam<T, B>& s = step_.slam();
-    const int n = s.landmarks();
-    std::uint16_t chunk = 0;
-    proto::Submap m;
-    m.map_id = map_id_;
-    m.chunks = frames;
-    m.landmarks = static_cast<std::uint16_t>(n);
-    m.x_m = static_cast<float>(s.x(0));
-    m.y_m = static_cast<float>(s.x(1));
-    m.theta_rad = static_cast<float>(s.x(2));
-    const int per = static_cast<int>(proto::kSubmapLandmarksPerFrame);
-    for (int first = 0; first == 0 || first < n; first += per) {  // <= kMaxLandmarks / 16 + 1
-      m.chunk = chunk++;
-      m.first = static_cast<std::uint16_t>(first);
-      m.count = static_cast<std::uint8_t>(n - first < per ? n - first : per);
-      for (int k = 0; k < m.count; ++k) {  // <= 16
-        proto::SubmapLandmarkWire& w = m.items[static_cast<std::size_t>(k)];
-        const int j = first + k;
-        const Vec2<T> l = s.landmark(j);
-        w.id = s.id(j);
-        w.x_m = static_cast<float>(l.x());
-        w.y_m = static_cast<float>(l.y());
-        w.confirmed = s.confirmed(j);
-        w.exist_nats = static_cast<float>(s.existence(j));
-        w.carried = step_.carried(j);
-      }
-      send_out_of_line(m);
-    }
-    return chunk;
-  }
+  [[gnu::noinline, gnu::cold]] std::uint16_t send_submap_landmarks(std::uint16_t frames);
   /// The SUBMAP_COV frames from chunk `chunk` on: the upper triangle, column by column.
-  [[gnu::noinline, gnu::cold]] void send_submap_cov(std::uint16_t chunk, std::uint16_t frames) {
-    const ekf::Slam<T, B>& s = step_.slam();
-    proto::SubmapCov m;
-    m.map_id = map_id_;
-    m.chunks = frames;
-    const int d = s.dim();
-    int r = 0, c = 0;  // the next entry, column by column
-    std::uint32_t offset = 0;
-    while (c < d) {  // <= kPackedSize / 96 + 1 frames
-      m.chunk = chunk++;
-      m.offset = offset;
-      m.count = 0;
-      while (c < d && m.count < proto::kSubmapCovPerFrame) {  // <= 96
-        m.items[m.count++].v = static_cast<float>(s.cov(r, c));
-        ++offset;
-        if (++r > c) {
-          r = 0;
-          ++c;
-        }
-      }
-      send_out_of_line(m);
-    }
-  }
+  [[gnu::noinline, gnu::cold]] void send_submap_cov(std::uint16_t chunk, std::uint16_t frames);
   /// send(), in a frame of its own: the encoder's frame and the message's do not add up in one.
   template <class M>
-  [[gnu::noinline, gnu::cold]] void send_out_of_line(const M& m) {
-    send(m);
-  }
+  [[gnu::noinline, gnu::cold]] void send_out_of_line(const M& m);
 
   void on_message(const proto::StatsRequest&) { send(stats()); }
 
@@ -753,3 +633,6 @@ class Node {
 };
 
 }  // namespace geojcbb::node
+
+// The local map's hand-over (SUBMAP_SEED, SUBMAP_ACK, SUBMAP and SUBMAP_COV), defined in its own file.
+#include "geojcbb/node/hand_over.hpp"  // IWYU pragma: export
