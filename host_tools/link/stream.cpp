@@ -264,18 +264,16 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     res.submaps.frames += w.frames;
     res.submaps.requests += w.requests;
     link.submap_received(map_id++);
-    held.clear();  // the next map begins with the carried ones
-    for (std::size_t k = 0; k < m.ids.size(); ++k) {
-      if (k < m.carried.size() && m.carried[k]) held.push_back(m.ids[k]);
-    }
+    held = global->carried_ids();  // the next map begins with the carried ones
     held_known = true;
     res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   };
 
   // The seed of the current local map before a batch: the global map's offer, the device's answer.
   auto seed_map = [&]() {
-    const Seed seed = global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame),
-                                   held_known ? held : std::vector<FeatureId>{});
+    static const std::vector<FeatureId> kNone;
+    const Seed seed =
+        global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), held_known ? held : kNone);
     if (seed.first_ids.empty()) return;
     proto::SubmapSeed m;
     m.batch_id = next_batch++;

@@ -143,6 +143,9 @@ class GlobalMap {
   FeatureId first_id(int k) const { return first_id_[static_cast<std::size_t>(k)]; }
   /// Local maps joined so far.
   int maps() const { return maps_; }
+  /// The local ids the last joined map kept into the next one (its Submap::carried): what the next
+  /// map begins with.
+  const std::vector<FeatureId>& carried_ids() const { return carried_ids_; }
   /// The whole state [base, landmarks] and its covariance.
   const Eigen::VectorXd& state() const { return x_; }
   const Eigen::MatrixXd& covariance() const { return P_; }
