@@ -347,8 +347,8 @@ int run_replay(const ReplayOptions& o) {
     any_join = any_join || (agg[k].have_first && !agg[k].first.submaps.joins.empty());
   if (any_join) {  // per strategy and local map: what its join did (docs/submaps.md)
     std::ofstream j(o.flags.out_dir + "/joins.csv");
-    j << "strategy,map,t_s,landmarks,shared,offered,fused,declined,pruned,dropped,removed,refused,joint_d2,global_landmarks,"
-         "base_x_m,base_y_m,base_theta_rad,base_sd_x_m,base_sd_y_m,base_sd_theta_rad\n";
+    j << "strategy,map,t_s,landmarks,shared,offered,fused,declined,pruned,dropped,removed,refused,joint_d2,shared_d2,"
+         "shared_dof,seeded_d2,seeded_dof,global_landmarks,base_x_m,base_y_m,base_theta_rad,base_sd_x_m,base_sd_y_m,base_sd_theta_rad\n";
     for (std::size_t k = 0; k < strategies.size(); ++k) {
       if (!agg[k].have_first) continue;
       const std::vector<JoinRecord>& js = agg[k].first.submaps.joins;
@@ -356,8 +356,9 @@ int run_replay(const ReplayOptions& o) {
         const JoinRecord& r = js[m];
         j << strategies[k].name() << ',' << m << ',' << r.t_s << ',' << r.landmarks << ',' << r.shared << ','
           << r.offered << ',' << r.fused << ',' << r.declined << ',' << r.pruned << ',' << r.dropped << ',' << r.removed
-          << ',' << r.refused << ',' << r.joint_d2 << ',' << r.global << ',' << r.base[0] << ',' << r.base[1] << ','
-          << r.base[2] << ',' << r.base_sd[0] << ',' << r.base_sd[1] << ',' << r.base_sd[2] << '\n';
+          << ',' << r.refused << ',' << r.joint_d2 << ',' << r.shared_d2 << ',' << r.shared_dof << ',' << r.seeded_d2
+          << ',' << r.seeded_dof << ',' << r.global << ',' << r.base[0] << ',' << r.base[1] << ',' << r.base[2] << ','
+          << r.base_sd[0] << ',' << r.base_sd[1] << ',' << r.base_sd[2] << '\n';
       }
     }
     if (!j) throw std::runtime_error("cannot write " + o.flags.out_dir + "/joins.csv");

@@ -202,7 +202,21 @@ JoinResult GlobalMap::join(const Submap& m) {
       m0(out) = seed_.x(from);
       P0(out, out) = seed_.P(from, from);
     }
-    shared_update(m, shared, target, m0, P0);
+    if (!carried.empty() && !seeded.empty()) {  // the seeded ones alone, reported (docs/submaps.md)
+      std::vector<int> sh, tg, rows;
+      for (int k : seeded) {
+        sh.push_back(shared[static_cast<std::size_t>(k)]);
+        tg.push_back(target[static_cast<std::size_t>(k)]);
+        rows.push_back(2 * k);
+        rows.push_back(2 * k + 1);
+      }
+      res.seeded_d2 = shared_update(m, sh, tg, m0(rows), P0(rows, rows), false, res.seeded_dof);
+    }
+    res.shared_d2 = shared_update(m, shared, target, m0, P0, true, res.shared_dof);
+    if (carried.empty()) {
+      res.seeded_d2 = res.shared_d2;
+      res.seeded_dof = res.shared_dof;
+    }
     for (std::size_t k = 0; k < shared.size(); ++k)  // it began from the global map's: its evidence is the latest
       exist_[static_cast<std::size_t>(target[k])] = m.exist_nats[static_cast<std::size_t>(shared[k])];
   }
@@ -450,8 +464,9 @@ JoinResult GlobalMap::join(const Submap& m) {
   return res;
 }
 
-void GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
-                              const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0) {
+double GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
+                                const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, bool apply, int& dof) {
+  dof = 0;
   const int s = static_cast<int>(shared.size());
   std::vector<int> rows;
   for (int i : shared) {
@@ -478,7 +493,7 @@ void GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared, c
   std::vector<int> dirs;
   for (int e = 0; e < 2 * s; ++e)
     if (top > 0 && eig.eigenvalues()(e) > 1e-9 * top) dirs.push_back(e);
-  if (dirs.empty()) return;
+  if (dirs.empty()) return 0;
   const int r = static_cast<int>(dirs.size());
   Eigen::MatrixXd Hm(r, D0);
   Eigen::VectorXd nu(r), noise(r);
@@ -495,11 +510,15 @@ void GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared, c
   S.diagonal() += noise;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) throw std::runtime_error("join: the shared landmarks' update is not definite");
+  dof = r;
+  const double d2 = nu.dot(llt.solve(nu));
+  if (!apply) return d2;
   const Eigen::MatrixXd K = llt.solve(HP).transpose();
   x_ += K * nu;
   x_(2) = wrap_angle(x_(2));
   P_ -= K * HP;
   P_ = (0.5 * (P_ + P_.transpose())).eval();
+  return d2;
 }
 
 void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::vector<int>& shared,

@@ -88,6 +88,28 @@ TEST_CASE("global map: a carried landmark the new map learned nothing about leav
   CHECK(g.landmarks() == 3);
 }
 
+TEST_CASE("global map: the shared landmarks' update is measured: d2 = |shift|^2 / (prior - posterior variance)") {
+  GlobalMap g(JoinOptions{});
+  // Map 0 ends at (10, 0, 0) exactly; landmark 0 at (12, 1) with variance p = 0.04, carried over.
+  Submap m0 = make_map(0, {10, 0, 0}, {{12, 1}, {15, -2}}, {0, 1}, 0.04);
+  m0.carried = {true, false};
+  g.join(m0);
+  // Map 1 began with it at (2, 1) (variance p, as the global map holds it) and its scans moved it by
+  // (0.3, 0) to variance q = 0.01: information 1/q - 1/p, a measurement at (2, 1) + p (0.3, 0) / (p - q)
+  // with variance pq / (p - q); against the global (2, 1) with variance p, d2 = 0.3^2 / (p - q) = 3.
+  const JoinResult j = g.join(make_map(1, {1, 0, 0}, {{2.3, 1}, {40, 0}}, {0, 5}, 0.01));
+  CHECK(j.shared == 1);
+  CHECK(j.shared_dof == 2);
+  CHECK(j.shared_d2 == doctest::Approx(3.0).epsilon(1e-6));
+  CHECK(j.seeded_dof == 0);  // nothing seeded
+  CHECK(j.seeded_d2 == 0);
+  // Fused with weight p / (p + pq / (p - q)) = 3/4, the measurement's 0.4 moves (12, 1) by 0.3: the map
+  // began from the global estimate itself, so the global one becomes the map's posterior.
+  CHECK(g.landmark(0).x() == doctest::Approx(12.3).epsilon(1e-6));
+  CHECK(g.landmark_covariance(0)(0, 0) == doctest::Approx(0.01).epsilon(1e-6));
+  CHECK(g.landmark(0).y() == doctest::Approx(1.0).epsilon(1e-6));
+}
+
 TEST_CASE("global map: a carried landmark the next map removed leaves the global map; one never carried stays") {
   JoinOptions o;
   o.remove_carried = true;
@@ -135,7 +157,14 @@ TEST_CASE("global map: env1 in local maps of 30 landmarks, carried over and seed
     CHECK(r.submaps.wrong == 0);
     CHECK(r.submaps.refused == 0);
     REQUIRE(r.submaps.joins.size() == static_cast<std::size_t>(r.submaps.maps));
-    for (const JoinRecord& j : r.submaps.joins) shared[seed] += j.shared;
+    for (const JoinRecord& j : r.submaps.joins) {
+      shared[seed] += j.shared;
+      CHECK(j.shared_dof <= 2 * j.shared);
+      CHECK(j.seeded_dof <= j.shared_dof);
+      CHECK(j.shared_d2 >= 0);
+      CHECK(j.seeded_d2 >= 0);
+      if (!seed) CHECK(j.seeded_dof == 0);
+    }
     // Unseeded, the loop is closed by the joins' association; seeded, in the local maps.
     if (!seed) CHECK(r.submaps.fused + r.submaps.declined + r.submaps.offered > 0);
     CHECK(r.score.f1() > 0.98);

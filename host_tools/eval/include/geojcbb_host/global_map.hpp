@@ -158,8 +158,10 @@ class GlobalMap {
   /// What the map's scans add on the landmarks it shares with the previous map: its information on
   /// them less the prior it began with (the previous map's, in its last pose's frame), as a
   /// measurement of the global state (conditionally independent maps, Pinies and Tardos 2008).
-  void shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
-                     const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0);
+  /// With `apply` false the state is left as it was. @return the measurement's nu^T S^-1 nu; `dof`
+  /// its dimension (the directions the scans informed; 0: nothing to fuse, and 0 returned).
+  double shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
+                       const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, bool apply, int& dof);
   /// The global state with the map's rows u (its pose, its landmarks not shared) appended, given the
   /// shared ones: X = [x_, base (+) u], P with every correlation.
   void augment(const Submap& m, const std::vector<int>& u, const std::vector<int>& shared,

@@ -74,6 +74,14 @@ struct JoinCounts {
   int removed = 0;       ///< seeds the map took and removed by their evidence: gone from the global map
   bool refused = false;  ///< the pairs were not jointly compatible: all kept apart
   double joint_d2 = 0;   ///< of the pairs' constraints, with the full covariance
+  /// The shared landmarks' update (fused by their ids, not tested): nu^T S^-1 nu and its dimension
+  /// (the directions the map's scans informed). Consistent maps give about one per dimension.
+  double shared_d2 = 0;
+  int shared_dof = 0;
+  /// The same for the seeded ones alone (against their seeds' prior): a seed the map paired
+  /// wrongly, or a region of the global map off beyond its covariance, shows here first.
+  double seeded_d2 = 0;
+  int seeded_dof = 0;
 };
 
 /// One join as a run records it (SubmapStats::joins; replay writes them to joins.csv).
