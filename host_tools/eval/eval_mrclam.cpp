@@ -63,6 +63,11 @@ Subcommand add_mrclam_command(CLI::App& app) {
                "per data set and strategy, merge the robots' final maps into one global map with their start poses "
                "unknown (a pose-free alignment finds them; docs/submaps.md): prints the global map, wrong joins and "
                "the starts found against the ground truth");
+  mr->add_option("--seconds", m.seconds,
+                 "only each robot's first seconds, from its first odometry sample (0: all); with --merge, the maps "
+                 "as they were then")
+      ->default_val(m.seconds)
+      ->check(CLI::NonNegativeNumber);
   add_run_options(*mr, m.run);
   return {mr, [o]() {
             MrclamOptions& mo = o->m;

@@ -332,8 +332,11 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       const MrclamModel model = mrclam_model(
           data[jb.d].noise, data[jb.d].calibration.empty() ? mrclam::RobotCalibration{} : data[jb.d].calibration[jb.r],
           o.camera, o.drive, o.model_inflation);
+      const mrclam::RobotLog& full = data[jb.d].logs[jb.r];
+      mrclam::RobotLog cut;
+      if (o.seconds > 0) cut = replay::truncate(full, o.seconds);
       const replay::EventLog log =
-          replay::mrclam_to_log(data[jb.d].ds, data[jb.d].logs[jb.r], model, o.drop_other_robots);
+          replay::mrclam_to_log(data[jb.d].ds, o.seconds > 0 ? cut : full, model, o.drop_other_robots);
       const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
       ro.landmark_group = replay::landmark_groups(positions, kLandmarkGroupRadius_m);
       if (o.known_map) ro.known_map = positions;

@@ -123,6 +123,9 @@ struct MrclamOptions {
   /// --merge: per data set and strategy, the robots' final maps merged into one with their start
   /// poses unknown (map_merge.hpp); the merged map, its wrong joins and the starts found are printed.
   bool merge = false;
+  /// > 0: each robot's first `seconds` only, from its first odometry sample (replay::truncate); the
+  /// noise and the calibration are the whole logs' (what a full run uses).
+  double seconds = 0;
   MergeOptions merge_options;
   /// Runs each replay's inputs (empty: in process, run_inputs); a device over the link needs jobs = 1.
   RunInputsFn runner;
