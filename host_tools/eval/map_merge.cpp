@@ -61,6 +61,7 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
   res.truth = maps[0].truth;
   res.aligned.push_back(true);
   res.start.push_back(Pose2<double>{0, 0, 0});
+  res.start_cov.push_back(Eigen::Matrix3d::Zero());
   res.pairs.push_back(0);
   res.why.emplace_back();
   auto al = std::make_unique<Aligner>();
@@ -71,6 +72,7 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
       throw std::runtime_error("merge: a map larger than the alignment's capacity (127 landmarks, 256 merged)");
     }
     res.start.push_back(Pose2<double>{0, 0, 0});
+    res.start_cov.push_back(Eigen::Matrix3d::Zero());
     res.pairs.push_back(0);
     res.aligned.push_back(false);
     res.why.emplace_back();
@@ -185,6 +187,7 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
     }
     res.aligned.back() = true;
     res.start.back() = a.pose;
+    res.start_cov.back() = a.cov;
     res.pairs.back() = p;
     res.fused += p;
   }

@@ -248,13 +248,19 @@ void print_merge(int dataset, const std::string& strategy, const std::vector<Mer
     }
     const Pose2<double>& f = m.start[k];
     const double e = std::hypot(f.x - truth.x, f.y - truth.y), a = std::abs(wrap_angle(f.theta - truth.theta));
+    const Eigen::Matrix3d& C = m.start_cov[k];
+    const double sd_x = std::sqrt(C(0, 0)), sd_y = std::sqrt(C(1, 1)), sd_deg = std::sqrt(C(2, 2)) * 180 / kPi<double>;
     std::printf(
-        "  robot %d's start in robot %d's frame: found (%.3f, %.3f, %.2f deg), true (%.3f, %.3f, %.2f deg): "
-        "error %.3f m, %.2f deg; %d landmarks fused\n",
-        robots[k].robot, robots[0].robot, f.x, f.y, f.theta * 180 / kPi<double>, truth.x, truth.y,
+        "  robot %d's start in robot %d's frame: found (%.3f, %.3f, %.2f deg), standard deviations (%.3f, %.3f, "
+        "%.2f deg); true (%.3f, %.3f, %.2f deg): error %.3f m, %.2f deg; %d landmarks fused\n",
+        robots[k].robot, robots[0].robot, f.x, f.y, f.theta * 180 / kPi<double>, sd_x, sd_y, sd_deg, truth.x, truth.y,
         truth.theta * 180 / kPi<double>, e, a * 180 / kPi<double>, m.pairs[k]);
-    starts.push_back(
-        {{"robot", robots[k].robot}, {"found", true}, {"error_m", e}, {"error_deg", a * 180 / kPi<double>}});
+    starts.push_back({{"robot", robots[k].robot},
+                      {"found", true},
+                      {"error_m", e},
+                      {"error_deg", a * 180 / kPi<double>},
+                      {"sd_m", {sd_x, sd_y}},
+                      {"sd_deg", sd_deg}});
   }
   js["merged"].push_back({{"dataset", dataset},
                           {"strategy", strategy},

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Dense>
+
 #include "geojcbb_host/map_merge.hpp"
 
 using namespace geojcbb;
@@ -60,7 +62,15 @@ TEST_CASE("merge: five robots' maps with unknown starts become one map, the star
     const double tx = c * (b.x - a.x) + s * (b.y - a.y), ty = -s * (b.x - a.x) + c * (b.y - a.y);
     CHECK(std::hypot(m.start[k].x - tx, m.start[k].y - ty) < 0.1);
     CHECK(std::abs(wrap_angle(m.start[k].theta - wrap_angle(b.theta - a.theta))) < 0.02);
+    // The start's covariance says how far it may be: the error's NEES within chi2(0.999, 3).
+    const Eigen::Vector3d err(m.start[k].x - tx, m.start[k].y - ty, wrap_angle(m.start[k].theta - (b.theta - a.theta)));
+    const Eigen::Matrix3d& C = m.start_cov[k];
+    REQUIRE(C.determinant() > 0);
+    CAPTURE(err.transpose());
+    CAPTURE(C);
+    CHECK(err.dot(C.ldlt().solve(err)) < 16.27);
   }
+  CHECK(m.start_cov[0].isZero());
   // Every merged landmark is one true landmark, near it.
   for (std::size_t j = 0; j < m.landmarks.size(); ++j) {
     const Eigen::Vector2d w = world[static_cast<std::size_t>(m.truth[j])];

@@ -39,8 +39,11 @@ struct MergeOptions {
 struct MergeResult {
   std::vector<bool> aligned;         ///< per map: joined (the first is the frame)
   std::vector<Pose2<double>> start;  ///< per map: its frame in the merged frame (the first: 0)
-  std::vector<int> pairs;            ///< per map: landmarks fused with the merged map
-  std::vector<std::string> why;      ///< per map not joined: the reason
+  /// per map: the alignment's covariance of its start (x, y, theta; zero for the first and for a map
+  /// not joined): how far the start found may be from the true one.
+  std::vector<Eigen::Matrix3d> start_cov;
+  std::vector<int> pairs;        ///< per map: landmarks fused with the merged map
+  std::vector<std::string> why;  ///< per map not joined: the reason
   std::vector<Eigen::Vector2d> landmarks;
   Eigen::MatrixXd P;
   std::vector<int> truth;  ///< per merged landmark: the first truth it was made from
