@@ -68,14 +68,19 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
   for (std::size_t k = 1; k < maps.size(); ++k) {
     const RobotMap& b = maps[k];
     const int n = static_cast<int>(b.landmarks.size()), N = static_cast<int>(res.landmarks.size());
-    if (n > MergeBounds::kMaxObservations || N > MergeBounds::kMaxLandmarks) {
-      throw std::runtime_error("merge: a map larger than the alignment's capacity (127 landmarks, 256 merged)");
-    }
     res.start.push_back(Pose2<double>{0, 0, 0});
     res.start_cov.push_back(Eigen::Matrix3d::Zero());
     res.pairs.push_back(0);
     res.aligned.push_back(false);
     res.why.emplace_back();
+    if (n > MergeBounds::kMaxObservations || N > MergeBounds::kMaxLandmarks) {  // kept apart, not an error
+      char d[160];
+      std::snprintf(d, sizeof d,
+                    "larger than the alignment's capacity: %d landmarks (at most %d) against %d (at most %d)", n,
+                    MergeBounds::kMaxObservations, N, MergeBounds::kMaxLandmarks);
+      res.why.back() = d;
+      continue;
+    }
     // 1. Pose-free alignment: b's landmarks as range-bearing from its origin, against the merged map.
     al->obs.clear();
     al->ws.clear_map();

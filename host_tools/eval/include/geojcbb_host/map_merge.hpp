@@ -51,8 +51,8 @@ struct MergeResult {
   int wrong = 0;           ///< of those, two different known truths
 };
 
-/// Merges the maps in order (see the file's head). Throws std::runtime_error when a map is larger
-/// than the alignment's capacity (127 landmarks per map, 256 merged).
+/// Merges the maps in order (see the file's head). A map larger than the alignment's capacity (127
+/// landmarks per map, 256 merged) is kept apart, with the reason in `why`.
 MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o = {});
 
 }  // namespace geojcbb::host
