@@ -216,6 +216,16 @@ Pose2<double> relative(const Pose2<double>& a, const Pose2<double>& b) {
   return {c * dx + sn * dy, -sn * dx + c * dy, wrap_angle(b.theta - a.theta)};
 }
 
+/// The heading standard deviation at the run's first scan with a pairing [rad] (-1: none): the
+/// floor on its map's rotation about its start, since only the odometry before that scan ties the two
+/// (docs/submaps.md, "What the logs allow").
+double first_pairing_heading_sd(const RunResult& r) {
+  for (const StepRecord& st : r.steps) {
+    if (st.paired > 0) return std::sqrt(std::max(st.var_theta, 0.0));
+  }
+  return -1;
+}
+
 struct MergedRobot {
   int robot;
   Pose2<double> x0;  ///< its true start: only for the score
@@ -238,12 +248,19 @@ void print_merge(int dataset, const std::string& strategy, const std::vector<Mer
       "robots %.3f\n",
       m.landmarks.size(), m.wrong, m.fused, alone, f1);
   nlohmann::json starts = nlohmann::json::array();
+  const double sd0 = first_pairing_heading_sd(*robots[0].res);
   for (std::size_t k = 1; k < robots.size(); ++k) {
     const Pose2<double> truth = relative(robots[0].x0, robots[k].x0);
+    const double sdk = first_pairing_heading_sd(*robots[k].res);
+    const double floor_deg = sd0 >= 0 && sdk >= 0 ? std::hypot(sd0, sdk) * 180 / kPi<double> : -1;
+    std::printf(
+        "  robot %d: the logs' floor on its start's heading: %.2f deg (both robots' heading standard "
+        "deviations at their first paired scan)\n",
+        robots[k].robot, floor_deg);
     if (!m.aligned[k]) {
       std::printf("  robot %d: not joined: %s (its true start (%.2f, %.2f, %.2f))\n", robots[k].robot, m.why[k].c_str(),
                   truth.x, truth.y, truth.theta);
-      starts.push_back({{"robot", robots[k].robot}, {"found", false}, {"why", m.why[k]}});
+      starts.push_back({{"robot", robots[k].robot}, {"found", false}, {"why", m.why[k]}, {"floor_deg", floor_deg}});
       continue;
     }
     const Pose2<double>& f = m.start[k];
@@ -260,7 +277,8 @@ void print_merge(int dataset, const std::string& strategy, const std::vector<Mer
                       {"error_m", e},
                       {"error_deg", a * 180 / kPi<double>},
                       {"sd_m", {sd_x, sd_y}},
-                      {"sd_deg", sd_deg}});
+                      {"sd_deg", sd_deg},
+                      {"floor_deg", floor_deg}});
   }
   js["merged"].push_back({{"dataset", dataset},
                           {"strategy", strategy},
