@@ -102,12 +102,15 @@ TEST_CASE("merge: a map that fits two ways (a regular grid) or not at all is kep
 
 TEST_CASE("merge: a map larger than the alignment's capacity is kept apart with the reason, and the rest merge") {
   std::mt19937 rng(5);
-  std::vector<Eigen::Vector2d> world;
   std::uniform_real_distribution<double> u(-15.0, 15.0);
-  for (int i = 0; i < 130; ++i) world.emplace_back(u(rng), u(rng));
-  std::vector<int> all(130), some;
+  std::vector<Eigen::Vector2d> world(130);
+  for (Eigen::Vector2d& w : world) {
+    const double x = u(rng);
+    w = Eigen::Vector2d(x, u(rng));
+  }
+  std::vector<int> all(130), some(40);
   for (int i = 0; i < 130; ++i) all[static_cast<std::size_t>(i)] = i;
-  for (int i = 0; i < 40; ++i) some.push_back(i * 3);
+  for (int i = 0; i < 40; ++i) some[static_cast<std::size_t>(i)] = i * 3;
   std::vector<RobotMap> maps{seen_from(world, some, {0, 0, 0}, 0.01, rng),
                              seen_from(world, all, {1, 0.5, 0.3}, 0.01, rng),  // 130 > 127
                              seen_from(world, some, {2, 1, -0.2}, 0.01, rng)};
