@@ -1,0 +1,142 @@
+// The host's global map as it grows (docs/submaps.md, "How the host's join scales"): a chain of
+// generated local maps along a corridor, each with `--map-landmarks` landmarks of which `--overlap`
+// are the previous map's last ones seen again (found by the join's association, not by their ids),
+// joined one after the other until the global map holds `--max-landmarks`. Per size bin of the
+// global map: the join's median time as a ratio to the first bin's (measured in the same run: timing
+// is reported, never asserted), what was fused and kept apart, and the global covariance's memory.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Dense>
+
+#include "geojcbb_host/global_map.hpp"
+#include "geojcbb_host/guarded_main.hpp"
+
+namespace {
+
+using geojcbb::FeatureId;
+using geojcbb::host::GlobalMap;
+using geojcbb::host::JoinOptions;
+using geojcbb::host::JoinResult;
+using geojcbb::host::Submap;
+
+struct Options {
+  int max_landmarks = 3200;
+  int map_landmarks = 72;
+  int overlap = 12;
+  double sigma_m = 0.1;
+  unsigned seed = 1;
+};
+
+/// Map k of the chain: its frame begins at the world's (k L, 0) heading along x and it ends at (L, 0,
+/// 0) in it. `world` are the landmarks it sees (world frame), each measured with independent noise.
+Submap make_map(int k, double L, const std::vector<Eigen::Vector2d>& world, FeatureId& next_id, double sigma,
+                std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, sigma);
+  Submap m;
+  m.index = k;
+  const int count = static_cast<int>(world.size());
+  m.x.resize(3 + 2 * count);
+  m.x.head<3>() << L, 0, 0;
+  m.P = Eigen::MatrixXd::Identity(3 + 2 * count, 3 + 2 * count) * sigma * sigma;
+  m.P.topLeftCorner<3, 3>() = Eigen::Vector3d(1e-4, 1e-4, 1e-6).asDiagonal();
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector2d& w = world[static_cast<std::size_t>(i)];
+    const double ex = n(rng);
+    m.x.segment<2>(3 + 2 * i) = Eigen::Vector2d(w.x() - k * L + ex, w.y() + n(rng));
+    m.ids.push_back(next_id++);
+    m.confirmed.push_back(true);
+    m.exist_nats.push_back(10.0);
+  }
+  return m;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"the host's join as the global map grows (timing is measured, never asserted)"};
+  Options o;
+  app.add_option("--max-landmarks", o.max_landmarks, "stop when the global map holds this many")
+      ->check(CLI::Range(100, 20000));
+  app.add_option("--map-landmarks", o.map_landmarks, "landmarks per local map")->check(CLI::Range(8, 128));
+  app.add_option("--overlap", o.overlap, "of those, the previous map's last ones seen again")->check(CLI::Range(0, 64));
+  app.add_option("--sigma", o.sigma_m, "landmark noise [m]")->check(CLI::Range(0.001, 1.0));
+  app.add_option("--seed", o.seed, "random seed");
+  CLI11_PARSE(app, argc, argv);
+  if (o.overlap >= o.map_landmarks) throw std::runtime_error("--overlap must be below --map-landmarks");
+
+  std::mt19937 rng(o.seed);
+  const int fresh = o.map_landmarks - o.overlap;
+  const double L = fresh * 0.5;  // 20 m wide corridor, one landmark per 10 m^2
+  std::uniform_real_distribution<double> ux(0.0, L), uy(-10.0, 10.0);
+  GlobalMap g{JoinOptions{}};
+  FeatureId next_id = 0;
+  std::vector<Eigen::Vector2d> previous;
+  struct Bin {
+    int upto;
+    std::vector<double> ms;
+    int joins = 0, fused = 0, expected = 0, declined = 0, refused = 0;
+  };
+  std::vector<Bin> bins;
+  for (int b = 100; b <= o.max_landmarks * 2; b *= 2) bins.push_back(Bin{b, {}, 0, 0, 0, 0, 0});
+  for (int k = 0; g.landmarks() < o.max_landmarks; ++k) {
+    std::vector<Eigen::Vector2d> world(previous.end() - std::min<std::ptrdiff_t>(o.overlap, previous.size()),
+                                       previous.end());
+    const int seen_again = static_cast<int>(world.size());
+    for (int i = 0; i < fresh; ++i) {  // sorted along x: the last ones are the next map's overlap
+      const double x = k * L + ux(rng);
+      world.emplace_back(x, uy(rng));
+    }
+    std::sort(world.begin() + seen_again, world.end(),
+              [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x(); });
+    const Submap m = make_map(k, L, world, next_id, o.sigma_m, rng);
+    const int before = g.landmarks();
+    const auto t0 = std::chrono::steady_clock::now();
+    const JoinResult j = g.join(m);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    auto bin = std::find_if(bins.begin(), bins.end(), [&](const Bin& x) { return before < x.upto; });
+    if (k > 0 && bin != bins.end()) {
+      bin->ms.push_back(ms);
+      ++bin->joins;
+      bin->fused += j.fused;
+      bin->expected += seen_again;
+      bin->declined += j.declined + j.pruned;
+      bin->refused += j.refused ? 1 : 0;
+    }
+    previous = std::move(world);
+  }
+  std::printf("# the host's join as the global map grows: %d-landmark local maps, %d seen again per map\n\n",
+              o.map_landmarks, o.overlap);
+  std::printf(
+      "| global landmarks before the join | joins | median join [ms] | ratio to the first bin | fused / seen again "
+      "| declined or pruned | refused | global covariance at the bin's top [MB] |\n| --- | --- | --- | --- | --- | --- "
+      "| --- | --- |\n");
+  double base = 0;
+  int lo = 0;
+  for (const Bin& b : bins) {
+    if (b.joins == 0) {
+      lo = b.upto;
+      continue;
+    }
+    const double med = median(b.ms);
+    if (base == 0) base = med;
+    const double dim = 3.0 + 2.0 * b.upto;
+    std::printf("| %d-%d | %d | %.2f | %.1f | %d / %d | %d | %d | %.1f |\n", lo, b.upto - 1, b.joins, med, med / base,
+                b.fused, b.expected, b.declined, b.refused, dim * dim * 8 / 1e6);
+    lo = b.upto;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return geojcbb::host::guarded_main(run, argc, argv); }
