@@ -52,6 +52,41 @@ void in_frame(const Eigen::VectorXd& x, const std::vector<int>& g, Eigen::Vector
   }
 }
 
+/// The columns of A that hold a nonzero: a Jacobian with respect to the global state touches only
+/// the base and a few landmarks.
+std::vector<Eigen::Index> nonzero_columns(const Eigen::MatrixXd& A) {
+  std::vector<Eigen::Index> nz;
+  for (Eigen::Index c = 0; c < A.cols(); ++c)
+    if ((A.col(c).array() != 0.0).any()) nz.push_back(c);
+  return nz;
+}
+
+/// A P for such an A: O(rows x nonzero columns x P's size) instead of O(rows x P's size^2).
+Eigen::MatrixXd sparse_times(const Eigen::MatrixXd& A, const Eigen::MatrixXd& P) {
+  const std::vector<Eigen::Index> nz = nonzero_columns(A);
+  return A(Eigen::indexing::all, nz) * P(nz, Eigen::indexing::all);
+}
+
+/// P = (P + P^T) / 2 in place, tile by tile: the same values as the expression (the sum is
+/// commutative) without a second matrix of the global map's size (docs/submaps.md, "How the host's
+/// join scales").
+void symmetrize(Eigen::MatrixXd& P) {
+  constexpr Eigen::Index kTile = 64;
+  const Eigen::Index n = P.rows();
+  for (Eigen::Index c0 = 0; c0 < n; c0 += kTile) {
+    for (Eigen::Index r0 = 0; r0 <= c0; r0 += kTile) {
+      const Eigen::Index c1 = std::min(n, c0 + kTile), r1 = std::min(n, r0 + kTile);
+      for (Eigen::Index c = c0; c < c1; ++c) {
+        for (Eigen::Index r = r0; r < std::min(r1, c); ++r) {
+          const double v = 0.5 * (P(r, c) + P(c, r));
+          P(r, c) = v;
+          P(c, r) = v;
+        }
+      }
+    }
+  }
+}
+
 /// in_frame's landmarks and their covariance H P H^T, from the rows of the pose and of those
 /// landmarks alone: O(s^2) for s landmarks (the seed's, every scan), not O(dim^2).
 void in_frame_cov(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& g, Eigen::VectorXd& c,
@@ -407,8 +442,8 @@ JoinResult GlobalMap::join(const Submap& m) {
       const Eigen::MatrixXd HPi = HP(r, Eigen::indexing::all);
       const Eigen::MatrixXd K = llt.solve(HPi).transpose();  // P H^T S^-1
       X += K * nu(r);
-      P -= K * HPi;
-      P = (0.5 * (P + P.transpose())).eval();
+      P.noalias() -= K * HPi;
+      symmetrize(P);
       for (int q : in) {
         const auto& pr = pairs[static_cast<std::size_t>(q)];
         drop[static_cast<std::size_t>(pr.first)] = true;
@@ -504,8 +539,9 @@ double GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared,
     nu(q) = v.dot(b) / lambda - v.dot(c);
     noise(q) = 1 / lambda;
   }
-  const Eigen::MatrixXd HP = Hm * P_;
-  Eigen::MatrixXd S = HP * Hm.transpose();
+  const Eigen::MatrixXd HP = sparse_times(Hm, P_);
+  const std::vector<Eigen::Index> nz = nonzero_columns(Hm);
+  Eigen::MatrixXd S = HP(Eigen::indexing::all, nz) * Hm(Eigen::indexing::all, nz).transpose();
   S = (0.5 * (S + S.transpose())).eval();
   S.diagonal() += noise;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
@@ -516,8 +552,8 @@ double GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared,
   const Eigen::MatrixXd K = llt.solve(HP).transpose();
   x_ += K * nu;
   x_(2) = wrap_angle(x_(2));
-  P_ -= K * HP;
-  P_ = (0.5 * (P_ + P_.transpose())).eval();
+  P_.noalias() -= K * HP;
+  symmetrize(P_);
   return d2;
 }
 
@@ -569,10 +605,12 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
   X << x_, v;
   P.resize(D, D);
   P.topLeftCorner(D0, D0) = P_;
-  const Eigen::MatrixXd cross = F * P_;  // Du x D0
+  const Eigen::MatrixXd cross = sparse_times(F, P_);  // Du x D0
   P.bottomLeftCorner(Du, D0) = cross;
   P.topRightCorner(D0, Du) = cross.transpose();
-  const Eigen::MatrixXd Puu = cross * F.transpose() + Jy * Pu * Jy.transpose();
+  const std::vector<Eigen::Index> nz = nonzero_columns(F);
+  const Eigen::MatrixXd Puu =
+      cross(Eigen::indexing::all, nz) * F(Eigen::indexing::all, nz).transpose() + Jy * Pu * Jy.transpose();
   P.bottomRightCorner(Du, Du) = 0.5 * (Puu + Puu.transpose());
 }
 
