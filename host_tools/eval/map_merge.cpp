@@ -144,7 +144,49 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
       res.why.back() = d;
       continue;
     }
-    // 3. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'
+    // 3. Each pair unique under the alignment's own uncertainty: no other merged landmark is
+    // individually compatible with the map's landmark, nor another of the map's with the merged one
+    // (the seeds' rule, GlobalMap::seed). Otherwise the pose is as well supported with the pairs
+    // exchanged: ambiguous, refused.
+    auto compatible = [&](int i, int j) {
+      const Eigen::Vector2d e = l.segment<2>(2 * i) - res.landmarks[static_cast<std::size_t>(j)];
+      const Eigen::Matrix2d Sij = Pl.block<2, 2>(2 * i, 2 * i) + res.P.block<2, 2>(2 * j, 2 * j);
+      return e.dot(Sij.ldlt().solve(e)) < gate1;
+    };
+    int rival_i = -1, rival_j = -1, rival_of = -1;
+    for (int u = 0; u < np && rival_of < 0; ++u) {
+      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
+      for (int j = 0; j < N && rival_of < 0; ++j) {
+        if (j != ju && compatible(iu, j)) {
+          rival_of = u;
+          rival_j = j;
+        }
+      }
+      for (int i = 0; i < n && rival_of < 0; ++i) {
+        if (i != iu && compatible(i, ju)) {
+          rival_of = u;
+          rival_i = i;
+        }
+      }
+    }
+    if (rival_of >= 0) {
+      const auto [iu, ju] = pairs[static_cast<std::size_t>(rival_of)];
+      char d[200];
+      if (rival_j >= 0) {
+        std::snprintf(d, sizeof d,
+                      "ambiguous pairs: under the alignment's uncertainty its landmark %d is compatible with merged "
+                      "landmarks %d and %d (of %zu pairs)",
+                      iu, ju, rival_j, pairs.size());
+      } else {
+        std::snprintf(d, sizeof d,
+                      "ambiguous pairs: under the alignment's uncertainty its landmarks %d and %d are both compatible "
+                      "with merged landmark %d (of %zu pairs)",
+                      iu, rival_i, ju, pairs.size());
+      }
+      res.why.back() = d;
+      continue;
+    }
+    // 4. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'
     // dropped.
     const int p = static_cast<int>(pairs.size());
     const int D = 2 * N + 2 * n;

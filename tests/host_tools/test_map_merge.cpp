@@ -31,6 +31,24 @@ RobotMap seen_from(const std::vector<Eigen::Vector2d>& world, const std::vector<
   m.P = Eigen::MatrixXd::Identity(2 * k, 2 * k) * sigma * sigma;
   return m;
 }
+
+// n landmarks uniform in [-half, half]^2 (x drawn before y).
+std::vector<Eigen::Vector2d> random_world(int n, double half, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-half, half);
+  std::vector<Eigen::Vector2d> world(static_cast<std::size_t>(n));
+  for (Eigen::Vector2d& w : world) {
+    const double x = u(rng);
+    w = Eigen::Vector2d(x, u(rng));
+  }
+  return world;
+}
+
+// 0, 1, ..., n - 1, each times step.
+std::vector<int> indices(int n, int step = 1) {
+  std::vector<int> v(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = i * step;
+  return v;
+}
 }  // namespace
 
 TEST_CASE("merge: five robots' maps with unknown starts become one map, the starts found") {
@@ -102,15 +120,8 @@ TEST_CASE("merge: a map that fits two ways (a regular grid) or not at all is kep
 
 TEST_CASE("merge: a map larger than the alignment's capacity is kept apart with the reason, and the rest merge") {
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-15.0, 15.0);
-  std::vector<Eigen::Vector2d> world(130);
-  for (Eigen::Vector2d& w : world) {
-    const double x = u(rng);
-    w = Eigen::Vector2d(x, u(rng));
-  }
-  std::vector<int> all(130), some(40);
-  for (int i = 0; i < 130; ++i) all[static_cast<std::size_t>(i)] = i;
-  for (int i = 0; i < 40; ++i) some[static_cast<std::size_t>(i)] = i * 3;
+  const std::vector<Eigen::Vector2d> world = random_world(130, 15.0, rng);
+  const std::vector<int> all = indices(130), some = indices(40, 3);
   std::vector<RobotMap> maps{seen_from(world, some, {0, 0, 0}, 0.01, rng),
                              seen_from(world, all, {1, 0.5, 0.3}, 0.01, rng),  // 130 > 127
                              seen_from(world, some, {2, 1, -0.2}, 0.01, rng)};
@@ -123,4 +134,27 @@ TEST_CASE("merge: a map larger than the alignment's capacity is kept apart with 
   // Each pair passes its 0.99 gate: of 40, one or two may be kept as new landmarks.
   CHECK(m.pairs[2] >= 38);
   CHECK(m.landmarks.size() == static_cast<std::size_t>(40 + 40 - m.pairs[2]));
+}
+
+TEST_CASE("merge: a pair that another landmark could take under the alignment's uncertainty is refused, not guessed") {
+  // Robot 0 maps 12 landmarks and a 13th 0.3 m from landmark 0; robot 1 sees the 12, not the 13th.
+  std::mt19937 rng(11);
+  std::vector<Eigen::Vector2d> world = random_world(12, 6.0, rng);
+  world.emplace_back(world[0] + Eigen::Vector2d(0.3, 0.0));
+  const std::vector<int> all = indices(13), shared = indices(12);
+  const Pose2<double> s0{0, 0, 0}, s1{2, -1, 0.8};
+  SUBCASE("maps precise enough to tell the two apart (2 cm): joined, landmark 0 with landmark 0") {
+    const MergeResult m = merge_maps({seen_from(world, all, s0, 0.02, rng), seen_from(world, shared, s1, 0.02, rng)});
+    REQUIRE(m.aligned[1]);
+    CHECK(m.wrong == 0);
+    CHECK(m.pairs[1] >= 11);
+  }
+  SUBCASE("maps too uncertain for 0.3 m (15 cm): kept apart as ambiguous") {
+    const MergeResult m = merge_maps({seen_from(world, all, s0, 0.15, rng), seen_from(world, shared, s1, 0.15, rng)});
+    CHECK_FALSE(m.aligned[1]);
+    CAPTURE(m.why[1]);
+    CHECK(m.why[1].find("ambiguous pairs") != std::string::npos);
+    CHECK(m.wrong == 0);
+    CHECK(m.landmarks.size() == 13);
+  }
 }

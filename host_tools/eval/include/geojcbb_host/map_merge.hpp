@@ -9,7 +9,11 @@
 //   2. tested: the alignment's pairs' constraints l' - m = 0 jointly, with the full covariance (the
 //      maps' own and the pose's); a join whose pairs are not jointly compatible is refused (pruning
 //      them into agreement would accept a subset of any pairing);
-//   3. fused: the maps are independent (each robot's own scans), so the merged state is [M, L'] with
+//   3. checked for unique pairs: under the alignment's own uncertainty no other merged landmark may
+//      be compatible with a paired landmark of the map, nor another of the map's with the merged
+//      one (chi2(confidence, 2)); otherwise the pairs could be exchanged and the map is refused as
+//      ambiguous;
+//   4. fused: the maps are independent (each robot's own scans), so the merged state is [M, L'] with
 //      a block-diagonal covariance, the constraints applied as one update and the paired rows of L'
 //      dropped (marginalised); its unpaired landmarks join as new ones.
 #pragma once
