@@ -53,18 +53,13 @@ void in_frame(const Eigen::VectorXd& x, const std::vector<int>& g, Eigen::Vector
 }
 
 /// The columns of A that hold a nonzero: a Jacobian with respect to the global state touches only
-/// the base and a few landmarks.
+/// the base and a few landmarks, so A P is A(:, nz) P(nz, :), O(rows x nz x P's size) instead of
+/// O(rows x P's size^2).
 std::vector<Eigen::Index> nonzero_columns(const Eigen::MatrixXd& A) {
   std::vector<Eigen::Index> nz;
   for (Eigen::Index c = 0; c < A.cols(); ++c)
     if ((A.col(c).array() != 0.0).any()) nz.push_back(c);
   return nz;
-}
-
-/// A P for such an A: O(rows x nonzero columns x P's size) instead of O(rows x P's size^2).
-Eigen::MatrixXd sparse_times(const Eigen::MatrixXd& A, const Eigen::MatrixXd& P) {
-  const std::vector<Eigen::Index> nz = nonzero_columns(A);
-  return A(Eigen::indexing::all, nz) * P(nz, Eigen::indexing::all);
 }
 
 /// P = (P + P^T) / 2 in place, tile by tile: the same values as the expression (the sum is
@@ -539,9 +534,10 @@ double GlobalMap::shared_update(const Submap& m, const std::vector<int>& shared,
     nu(q) = v.dot(b) / lambda - v.dot(c);
     noise(q) = 1 / lambda;
   }
-  const Eigen::MatrixXd HP = sparse_times(Hm, P_);
   const std::vector<Eigen::Index> nz = nonzero_columns(Hm);
-  Eigen::MatrixXd S = HP(Eigen::indexing::all, nz) * Hm(Eigen::indexing::all, nz).transpose();
+  const Eigen::MatrixXd Hnz = Hm(Eigen::indexing::all, nz);
+  const Eigen::MatrixXd HP = Hnz * P_(nz, Eigen::indexing::all);
+  Eigen::MatrixXd S = HP(Eigen::indexing::all, nz) * Hnz.transpose();
   S = (0.5 * (S + S.transpose())).eval();
   S.diagonal() += noise;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
@@ -605,12 +601,12 @@ void GlobalMap::augment(const Submap& m, const std::vector<int>& u, const std::v
   X << x_, v;
   P.resize(D, D);
   P.topLeftCorner(D0, D0) = P_;
-  const Eigen::MatrixXd cross = sparse_times(F, P_);  // Du x D0
+  const std::vector<Eigen::Index> nz = nonzero_columns(F);
+  const Eigen::MatrixXd Fnz = F(Eigen::indexing::all, nz);
+  const Eigen::MatrixXd cross = Fnz * P_(nz, Eigen::indexing::all);  // Du x D0
   P.bottomLeftCorner(Du, D0) = cross;
   P.topRightCorner(D0, Du) = cross.transpose();
-  const std::vector<Eigen::Index> nz = nonzero_columns(F);
-  const Eigen::MatrixXd Puu =
-      cross(Eigen::indexing::all, nz) * F(Eigen::indexing::all, nz).transpose() + Jy * Pu * Jy.transpose();
+  const Eigen::MatrixXd Puu = cross(Eigen::indexing::all, nz) * Fnz.transpose() + Jy * Pu * Jy.transpose();
   P.bottomRightCorner(Du, Du) = 0.5 * (Puu + Puu.transpose());
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/math.hpp"
@@ -47,6 +48,37 @@ void transformed(const RobotMap& b, const Pose2<double>& x, const Eigen::Matrix3
   }
   P = Jb * b.P * Jb.transpose() + Jx * Px * Jx.transpose();
   P = (0.5 * (P + P.transpose())).eval();
+}
+
+/// Step 3's test: for each pair (b's landmark i, merged landmark j), another merged landmark
+/// individually compatible with i, or another of b's landmarks with j (chi2 gate on the 2 x 2
+/// innovation; b's landmarks l, Pl already in the merged frame with the pose's covariance), as the
+/// global map's seeds must be unique (GlobalMap::seed). Returns the first rival found, in words, or
+/// "" when every pair is unique. O(pairs (n + N)).
+std::string rival_of(const std::vector<std::pair<int, int>>& pairs, const Eigen::VectorXd& l, const Eigen::MatrixXd& Pl,
+                     const MergeResult& merged, double gate) {
+  const int n = static_cast<int>(l.size() / 2), N = static_cast<int>(merged.landmarks.size());
+  auto compatible = [&](int i, int j) {
+    const Eigen::Vector2d e = l.segment<2>(2 * i) - merged.landmarks[static_cast<std::size_t>(j)];
+    const Eigen::Matrix2d S = Pl.block<2, 2>(2 * i, 2 * i) + merged.P.block<2, 2>(2 * j, 2 * j);
+    return e.dot(S.ldlt().solve(e)) < gate;
+  };
+  char d[160];
+  for (const auto& [i, j] : pairs) {
+    for (int jr = 0; jr < N; ++jr) {
+      if (jr == j || !compatible(i, jr)) continue;
+      std::snprintf(d, sizeof d, "its landmark %d is compatible with merged landmarks %d and %d (of %zu pairs)", i, j,
+                    jr, pairs.size());
+      return d;
+    }
+    for (int ir = 0; ir < n; ++ir) {
+      if (ir == i || !compatible(ir, j)) continue;
+      std::snprintf(d, sizeof d, "its landmarks %d and %d are both compatible with merged landmark %d (of %zu pairs)",
+                    i, ir, j, pairs.size());
+      return d;
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -144,46 +176,10 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
       res.why.back() = d;
       continue;
     }
-    // 3. Each pair unique under the alignment's own uncertainty: no other merged landmark is
-    // individually compatible with the map's landmark, nor another of the map's with the merged one
-    // (the seeds' rule, GlobalMap::seed). Otherwise the pose is as well supported with the pairs
-    // exchanged: ambiguous, refused.
-    auto compatible = [&](int i, int j) {
-      const Eigen::Vector2d e = l.segment<2>(2 * i) - res.landmarks[static_cast<std::size_t>(j)];
-      const Eigen::Matrix2d Sij = Pl.block<2, 2>(2 * i, 2 * i) + res.P.block<2, 2>(2 * j, 2 * j);
-      return e.dot(Sij.ldlt().solve(e)) < gate1;
-    };
-    int rival_i = -1, rival_j = -1, rival_of = -1;
-    for (int u = 0; u < np && rival_of < 0; ++u) {
-      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
-      for (int j = 0; j < N && rival_of < 0; ++j) {
-        if (j != ju && compatible(iu, j)) {
-          rival_of = u;
-          rival_j = j;
-        }
-      }
-      for (int i = 0; i < n && rival_of < 0; ++i) {
-        if (i != iu && compatible(i, ju)) {
-          rival_of = u;
-          rival_i = i;
-        }
-      }
-    }
-    if (rival_of >= 0) {
-      const auto [iu, ju] = pairs[static_cast<std::size_t>(rival_of)];
-      char d[200];
-      if (rival_j >= 0) {
-        std::snprintf(d, sizeof d,
-                      "ambiguous pairs: under the alignment's uncertainty its landmark %d is compatible with merged "
-                      "landmarks %d and %d (of %zu pairs)",
-                      iu, ju, rival_j, pairs.size());
-      } else {
-        std::snprintf(d, sizeof d,
-                      "ambiguous pairs: under the alignment's uncertainty its landmarks %d and %d are both compatible "
-                      "with merged landmark %d (of %zu pairs)",
-                      iu, rival_i, ju, pairs.size());
-      }
-      res.why.back() = d;
+    // 3. Each pair unique under the alignment's own uncertainty (rival_of): otherwise the pose is as
+    // well supported with the pairs exchanged: ambiguous, refused.
+    if (std::string why = rival_of(pairs, l, Pl, res, gate1); !why.empty()) {
+      res.why.back() = "ambiguous pairs: under the alignment's uncertainty " + why;
       continue;
     }
     // 4. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'
