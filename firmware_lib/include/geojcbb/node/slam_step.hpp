@@ -3,7 +3,7 @@
 //   predict(odometry)  ...  step(scan):
 //     relocaliser (lost: align, nothing else) -> predict_local(r + d) -> associate (strategy, or the
 //     caller's override) -> [tentative] -> loop check -> [clusters first] -> hypothesis window ->
-//     update (a stage's Closure: inflated pose, rounds) -> augment -> review -> [duplicate merge]
+//     update (a stage's Closure: inflated pose, rounds) -> augment (stages/augment.hpp) -> review -> [duplicate merge]
 //     -> the lost test (scan_evidence) and the relocaliser's confirmation
 // Each stage that keeps state across scans is a member of its own type (node/stages/), reads the
 // map through a MapView, edits the association only through pair/unpair, and returns what it
@@ -24,6 +24,7 @@
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/stages/augment.hpp"
 #include "geojcbb/node/stages/clusters_first.hpp"
 #include "geojcbb/node/stages/duplicate_merge.hpp"
 #include "geojcbb/node/stages/hypothesis_window.hpp"
@@ -424,40 +425,8 @@ class SlamStep {
     }
     window_.rebase(slam_.pose(), slam_.pose_covariance());
     const std::uint32_t t3 = clock ? clock() : 0;
-    // From here on nothing can fail: the outputs are written.
-    out.count = obs.count;
-    int evicted = 0;
-    for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
-      const FeatureId f = assoc_.feature[i];
-      out.d2[i] = assoc_.d2[i];
-      out.feature[i] = f >= 0 ? f : -1;
-      if (f >= 0) {
-        out.outcome[i] = Outcome::kPaired;
-      } else if (f == kUnmatched) {
-        out.outcome[i] = Outcome::kUnmatched;
-      } else if (!cfg_.augment || !(assoc_.d2[i] > gate_)) {
-        out.outcome[i] = Outcome::kNewDropped;
-      } else {
-        FeatureId id = -1;
-        // update() accepted every pair; a new landmark's z and R were validated by the caller's
-        // association (associate() validates them): only a full map can refuse.
-        Status added = slam_.augment(obs.z[i], obs.R[i], id);
-        FeatureId gone = -1;
-        // A full map makes room (evict_when_full): a landmark beyond r + d, not in this scan's
-        // prediction, so the pairs above and the review below are untouched.
-        if (added != Status::kOk && cfg_.evict_when_full && slam_.evict(cfg_.local_radius_m, gone) == Status::kOk) {
-          ++evicted;
-          added = slam_.augment(obs.z[i], obs.R[i], id);
-        }
-        if (added == Status::kOk) {
-          added_in_map_ += added_in_map_ < std::numeric_limits<int>::max();
-          out.outcome[i] = Outcome::kNewLandmark;
-          out.feature[i] = id;
-        } else {
-          out.outcome[i] = Outcome::kNotAugmented;
-        }
-      }
-    }
+    // From here on nothing can fail: the outputs are written (stages/augment.hpp).
+    const int evicted = augment_unpaired(obs, assoc_, cfg_, gate_, slam_, out, added_in_map_);
     // The scan's observed landmarks (paired, or added from it) are distinct for good.
     constexpr bool kMerge = OptionalStages<B>::kDuplicateMerge;  // compiled out: configure() refused it
     if (kMerge && cfg_.duplicate_merge_d2 > T(0))
