@@ -34,8 +34,8 @@ extern "C" {
  * the buffer given is large and aligned enough. Declare storage as, for example:
  *   static GEOJCBB_ALIGNED_STORAGE(assoc_mem, GEOJCBB_ASSOCIATOR_STORAGE_SIZE);  */
 #define GEOJCBB_STORAGE_ALIGN 16
-#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28784
-#define GEOJCBB_SLAM_STORAGE_SIZE 122816
+#define GEOJCBB_ASSOCIATOR_STORAGE_SIZE 28816
+#define GEOJCBB_SLAM_STORAGE_SIZE 125232
 /* C99 has no alignas: GCC and Clang's aligned attribute does it (the union's members give what the
  * ABI aligns anyway to other compilers, which can align a buffer their own way); the init calls
  * check the address in any case. */
@@ -143,7 +143,8 @@ typedef enum geojcbb_outcome {
   GEOJCBB_OUTCOME_NEW_LANDMARK = 1,
   GEOJCBB_OUTCOME_NEW_DROPPED = 2,
   GEOJCBB_OUTCOME_UNMATCHED = 3,
-  GEOJCBB_OUTCOME_NOT_AUGMENTED = 4
+  GEOJCBB_OUTCOME_NOT_AUGMENTED = 4,
+  GEOJCBB_OUTCOME_MOVER = 5
 } geojcbb_outcome;
 
 typedef struct geojcbb_step_result {

@@ -45,6 +45,7 @@ GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_LANDMARK, node::Outcome::kNewLandmark);
 GEOJCBB_SAME(GEOJCBB_OUTCOME_NEW_DROPPED, node::Outcome::kNewDropped);
 GEOJCBB_SAME(GEOJCBB_OUTCOME_UNMATCHED, node::Outcome::kUnmatched);
 GEOJCBB_SAME(GEOJCBB_OUTCOME_NOT_AUGMENTED, node::Outcome::kNotAugmented);
+GEOJCBB_SAME(GEOJCBB_OUTCOME_MOVER, node::Outcome::kMover);
 #undef GEOJCBB_SAME
 
 constexpr std::uint32_t kAssociatorMagic = 0x6A636231u;  // "jcb1"

@@ -124,7 +124,7 @@ svg::Panel gps_panel(const std::string& title, const RunResult& r, const std::ve
 // the association scores and the map's spurious and duplicate landmarks; without truth lines the pose
 // error and ANEES; a log has no kidnap, so no relocalisation score. Left empty, never 0.
 std::set<std::string> unmeasured_columns(bool scored, bool have_truth) {
-  std::set<std::string> u{"relocalised_at_scan"};
+  std::set<std::string> u{"relocalised_at_scan", "fp_mover", "movers_in_map"};  // no simulated movers either
   if (!scored) {
     u.insert({"tp", "tn", "fp", "fn", "precision", "recall", "f1", "spurious_in_map", "duplicates", "fp_clutter",
               "group_f1"});

@@ -16,6 +16,7 @@
 
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/event_log.hpp"
+#include "geojcbb_host/mover_motion.hpp"
 #include "geojcbb_host/report.hpp"
 
 namespace geojcbb::host {
@@ -115,6 +116,7 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
     RunInput in;
     in.scan = true;
     std::vector<SimObservation>& obs = in.observations;
+    std::vector<int>& subjects = scan_subjects.emplace_back();
     for (const mrclam::Measurement& m : scan.z) {
       if (drop_other_robots && m.subject >= 1 && m.subject <= mrclam::kRobots) continue;
       const int truth =
@@ -128,6 +130,7 @@ MrclamSource::MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& lo
         so.R = k2 * R;
       }
       obs.push_back(so);
+      subjects.push_back(m.subject);
     }
     mrclam::PoseSample pt{};
     in.have_truth = mrclam::interpolate_truth(log.truth, scan.t, pt);
@@ -166,8 +169,51 @@ MrclamModel mrclam_model(const MrclamNoise& noise, const mrclam::RobotCalibratio
 namespace {
 // mrclam.csv's columns between dataset, robot, strategy and error (report.hpp: run_csv).
 const std::vector<std::string> kMrclamCsvColumns{
-    "scans", "observations",  "tp",    "tn",           "fp",           "fn",        "precision",      "recall",
-    "f1",    "association_s", "run_s", "mean_abs_x_m", "mean_abs_y_m", "landmarks", "spurious_in_map"};
+    "scans", "observations",  "tp",    "tn",           "fp",           "fn",        "precision",       "recall",
+    "f1",    "association_s", "run_s", "mean_abs_x_m", "mean_abs_y_m", "landmarks", "spurious_in_map", "fp_clutter"};
+
+/// The mover split's observer of one replay: the subjects of the observations it is fed (the log
+/// says "clutter" for a robot; MrclamSource knows which), the robots' ground truth.
+MoverMotion mover_motion(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamModel& model,
+                         bool drop_other_robots, const std::vector<std::vector<mrclam::PoseSample>>& tracks) {
+  MoverMotion m(tracks, log.robot);
+  const MrclamSource src(ds, log, model, drop_other_robots);
+  std::size_t k = 0;
+  for (const RunInput& in : src.inputs()) {
+    if (in.scan) m.add_subjects(in.t_s, in.observations, src.scan_subjects[k++]);
+  }
+  return m;
+}
+
+/// The other robots' false pairs by how far the robot moved since its landmark was made
+/// (mover_motion.hpp), per strategy; their total is the FP of clutter less the false detections.
+void print_movers(const std::vector<Method>& strategies, const std::vector<MoverCounts>& movers,
+                  const std::vector<ReportRow>& rows) {
+  std::printf(
+      "False pairs with other robots, by how far the robot moved since the landmark was made from it "
+      "(sigma: docs/mrclam.md)\n  %-9s %9s %9s %9s %26s %7s %13s\n",
+      "strategy", mover_bucket_title(MoverBucket::kUnder1Sigma), mover_bucket_title(MoverBucket::k1To3Sigma),
+      mover_bucket_title(MoverBucket::kOver3Sigma), mover_bucket_title(MoverBucket::kOtherLandmark), "total",
+      "FP of clutter");
+  for (std::size_t s = 0; s < strategies.size(); ++s) {
+    const MoverCounts& c = movers[s];
+    std::printf("  %-9s %9d %9d %9d %26d %7d %13d\n", strategies[s].name().c_str(), c.bucket[0], c.bucket[1],
+                c.bucket[2], c.bucket[3], c.total(), rows[s].fp_clutter);
+    if (c.false_detections > 0 || c.unmatched > 0 || c.truth_gaps > 0)
+      std::printf(
+          "  %-9s (clutter not a robot paired: %d; observations without a subject: %d; positions from the "
+          "nearest truth sample: %d)\n",
+          "", c.false_detections, c.unmatched, c.truth_gaps);
+  }
+}
+
+nlohmann::json movers_json(const MoverCounts& c) {
+  nlohmann::json j;
+  for (int k = 0; k < kMoverBuckets; ++k)
+    j[mover_bucket_key(static_cast<MoverBucket>(k))] = c.bucket[static_cast<std::size_t>(k)];
+  j["false_detections"] = c.false_detections;
+  return j;
+}
 
 void write_trace(const std::string& path, const RunResult& res) {
   {
@@ -300,7 +346,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     mrclam::Dataset ds;
     std::vector<mrclam::RobotLog> logs;
     MrclamNoise noise;
-    std::vector<mrclam::RobotCalibration> calibration;  ///< per log
+    std::vector<mrclam::RobotCalibration> calibration;    ///< per log
+    std::vector<std::vector<mrclam::PoseSample>> tracks;  ///< robot -> its ground truth (the mover split)
   };
   if (o.calibration != "cross" && o.calibration != "same") {
     throw std::runtime_error("calibration: 'cross' or 'same' expected, not '" + o.calibration + "'");
@@ -311,6 +358,11 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     d.number = n;
     d.ds = mrclam::load_dataset(mrclam::dataset_dir(n, root));
     for (int r : o.robots) d.logs.push_back(mrclam::load_robot(d.ds, r));
+    d.tracks.resize(mrclam::kRobots + 1);
+    for (int k = 1; k <= mrclam::kRobots; ++k) {  // every robot can be seen, replayed or not
+      const auto it = std::find_if(d.logs.begin(), d.logs.end(), [&](const auto& l) { return l.robot == k; });
+      d.tracks[static_cast<std::size_t>(k)] = it != d.logs.end() ? it->truth : mrclam::load_robot(d.ds, k).truth;
+    }
     d.noise = MrclamNoise::from_data(d.ds, d.logs, o.noise_inflation);
     if (o.sigma_range_m > 0) d.noise.sigma_range_m = o.sigma_range_m;
     if (o.sigma_bearing_rad > 0) d.noise.sigma_bearing_rad = o.sigma_bearing_rad;
@@ -336,6 +388,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     std::size_t d, r, s;
     Pose2<double> x0{};  ///< the start (the ground truth's): the robot's own frame for --merge
     RunResult res;
+    MoverCounts movers;  ///< in process only (a device's runner does not report its steps' outcomes)
     double run_s = 0;
     std::string error;
   };
@@ -343,7 +396,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   for (std::size_t d = 0; d < data.size(); ++d)
     for (std::size_t r = 0; r < data[d].logs.size(); ++r)
       for (std::size_t s = 0; s < o.strategies.size(); ++s)
-        jobs.push_back({d, r, s, Pose2<double>{}, RunResult{}, 0, std::string{}});
+        jobs.push_back({d, r, s, Pose2<double>{}, RunResult{}, MoverCounts{}, 0, std::string{}});
   const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, progress, [&](std::size_t j) {
     Job& jb = jobs[j];
@@ -359,14 +412,17 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       const mrclam::RobotLog& full = data[jb.d].logs[jb.r];
       mrclam::RobotLog cut;
       if (o.seconds > 0) cut = replay::truncate(full, o.seconds);
-      const replay::EventLog log =
-          replay::mrclam_to_log(data[jb.d].ds, o.seconds > 0 ? cut : full, model, o.drop_other_robots);
+      const mrclam::RobotLog& used = o.seconds > 0 ? cut : full;
+      const replay::EventLog log = replay::mrclam_to_log(data[jb.d].ds, used, model, o.drop_other_robots);
+      MoverMotion movers = mover_motion(data[jb.d].ds, used, model, o.drop_other_robots, data[jb.d].tracks);
+      ro.on_scan = [&movers](const ScanOutcome& sc) { movers.on_scan(sc); };
       const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
       ro.landmark_group = replay::landmark_groups(positions, kLandmarkGroupRadius_m);
       if (o.known_map) ro.known_map = positions;
       replay::LogSource src(log, replay::LogNoise{});
       jb.x0 = src.x0;
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
+      jb.movers = movers.counts();
     } catch (const std::exception& e) {
       jb.error = e.what();
     }
@@ -378,6 +434,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   std::ofstream csv(out_dir + "/mrclam.csv");
   csv << "dataset,robot,strategy";
   for (const std::string& c : kMrclamCsvColumns) csv << ',' << c;
+  for (int k = 0; k < kMoverBuckets; ++k) csv << ",fp_robot_" << mover_bucket_key(static_cast<MoverBucket>(k));
   csv << ",error\n";
   for (std::size_t d = 0; d < data.size(); ++d) {
     const DatasetData& dd = data[d];
@@ -394,6 +451,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     for (const Method& s : o.strategies) std::printf(" %11s", s.name().c_str());
     std::printf("   winner\n");
     std::vector<RunAggregate> agg(o.strategies.size());
+    std::vector<MoverCounts> movers(o.strategies.size());
     for (std::size_t r = 0; r < dd.logs.size(); ++r) {
       std::printf("  %-6d", dd.logs[r].robot);
       double best = -1;
@@ -407,7 +465,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
           ++failures;
           agg[s].fail(jb.error);
           std::printf(" %11s", "failed");
-          csv << line << ",,,,,,,,,,,,,,," << csv_escape(jb.error) << '\n';
+          csv << line << std::string(kMrclamCsvColumns.size() + kMoverBuckets, ',') << csv_escape(jb.error) << '\n';
           continue;
         }
         const RunResult& res = jb.res;
@@ -426,7 +484,13 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
           winner += "=" + std::string(o.strategies[s].name());
         }
         agg[s].add(res, jb.run_s);
-        csv << line << run_csv(res, jb.run_s, kMrclamCsvColumns) << ",\n";
+        movers[s] += jb.movers;
+        csv << line << run_csv(res, jb.run_s, kMrclamCsvColumns);
+        for (int k : jb.movers.bucket) {  // empty through a device: it does not report the outcomes
+          csv << ',';
+          if (!o.runner) csv << k;
+        }
+        csv << ",\n";
       }
       std::printf("   %s\n", winner.c_str());
     }
@@ -443,6 +507,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     print_tables(rows, stdout);
     print_summary(rows, group_rows, stdout);
     print_submaps(o.strategies, agg, stdout);
+    if (!o.runner) print_movers(o.strategies, movers, rows);
     std::printf(
         "Table 2 at landmark-group level (a pair is correct when its "
         "feature's landmark is in the observed "
@@ -481,12 +546,15 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       svg::write(path, fig);
       std::printf("figure: %s\n", fig.c_str());
     }
+    nlohmann::json strategies_json = rows_json(rows);
+    for (std::size_t s = 0; s < o.strategies.size() && !o.runner; ++s)
+      strategies_json[s]["false_pairs_to_robots_by_motion"] = movers_json(movers[s]);
     js["datasets"].push_back({{"dataset", dd.number},
                               {"sigma_range_m", dd.noise.sigma_range_m},
                               {"sigma_bearing_rad", dd.noise.sigma_bearing_rad},
                               {"sigma_v_mps", dd.noise.sigma_v_mps},
                               {"sigma_w_radps", dd.noise.sigma_w_radps},
-                              {"strategies", rows_json(rows)},
+                              {"strategies", strategies_json},
                               {"group_level", rows_json(group_rows)}});
   }
   js["wall_s"] = wall_s;

@@ -155,11 +155,11 @@ ReportRow RunAggregate::group_row(const std::string& name) const {
 
 const std::vector<std::string>& run_csv_columns() {
   static const std::vector<std::string> c{
-      "scans",       "observations",        "tp",           "tn",         "fp",
-      "fn",          "precision",           "recall",       "f1",         "association_s",
-      "run_s",       "mean_abs_x_m",        "mean_abs_y_m", "landmarks",  "spurious_in_map",
-      "budget_hits", "relocalised_at_scan", "anees",        "duplicates", "fp_clutter",
-      "group_f1",    "ambiguous_scans"};
+      "scans",       "observations",        "tp",           "tn",           "fp",
+      "fn",          "precision",           "recall",       "f1",           "association_s",
+      "run_s",       "mean_abs_x_m",        "mean_abs_y_m", "landmarks",    "spurious_in_map",
+      "budget_hits", "relocalised_at_scan", "anees",        "duplicates",   "fp_clutter",
+      "group_f1",    "ambiguous_scans",     "fp_mover",     "movers_in_map"};
   return c;
 }
 
@@ -217,6 +217,10 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
       o << dup;
     } else if (c == "fp_clutter")
       o << r.fp_clutter;
+    else if (c == "fp_mover")
+      o << r.fp_mover;
+    else if (c == "movers_in_map")
+      o << r.movers_in_map;
     else if (c == "group_f1")
       o << r.group_score.f1();
     else

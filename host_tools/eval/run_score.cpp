@@ -21,8 +21,11 @@ int RunScorer::truth_of(FeatureId id) const {
                                                                          : kUnknown;
 }
 
-void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId>& paired) {
-  if (truth.size() != paired.size()) throw std::runtime_error("score: one pairing per observation expected");
+void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId>& paired,
+                      const std::vector<int>& mover) {
+  if (truth.size() != paired.size() || (!mover.empty() && mover.size() != truth.size())) {
+    throw std::runtime_error("score: one pairing (and mover) per observation expected");
+  }
   res_.observations += static_cast<int>(truth.size());
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const int t = truth[i];
@@ -32,6 +35,7 @@ void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId
       const int ft = truth_of(f);
       ++((t >= 0 && ft == t) ? res_.score.tp : res_.score.fp);
       res_.fp_clutter += t < 0;
+      res_.fp_mover += t < 0 && !mover.empty() && mover[i] >= 0;
       if (t >= 0 && ft >= 0 && ft != t)
         ++(f > first_[static_cast<std::size_t>(ft)] ? res_.fp_to_duplicate : res_.fp_to_original);
       if (t >= 0 && ft != t) ++((ft >= 0 && cls(ft) == cls(t)) ? res_.fp_in_group : res_.fp_other_group);
@@ -46,11 +50,15 @@ void RunScorer::score(const std::vector<int>& truth, const std::vector<FeatureId
   }
 }
 
-void RunScorer::added(FeatureId id, int truth) {
+void RunScorer::added(FeatureId id, int truth, int mover) {
   if (id < 0) return;
   const auto k = static_cast<std::size_t>(id);
-  if (k >= feature_truth_.size()) feature_truth_.resize(k + 1, kUnknown);
+  if (k >= feature_truth_.size()) {
+    feature_truth_.resize(k + 1, kUnknown);
+    feature_mover_.resize(k + 1, -1);
+  }
   feature_truth_[k] = truth;
+  feature_mover_[k] = truth < 0 ? mover : -1;
   if (truth >= 0) {
     ++mapped_[static_cast<std::size_t>(truth)];
     if (first_[static_cast<std::size_t>(truth)] < 0) first_[static_cast<std::size_t>(truth)] = id;
@@ -102,6 +110,10 @@ void RunScorer::nis(int paired, double nis_sum) {
 
 RunResult RunScorer::finish() const {
   RunResult res = res_;
+  res.movers_in_map = 0;
+  for (std::size_t k = 0; k < feature_truth_.size(); ++k) {
+    res.movers_in_map += feature_truth_[k] != kRemoved && feature_truth_[k] != kUnknown && feature_mover_[k] >= 0;
+  }
   if (!res.steps.empty()) {
     res.mean_abs_x_m /= static_cast<double>(res.steps.size());
     res.mean_abs_y_m /= static_cast<double>(res.steps.size());

@@ -33,7 +33,9 @@ struct SlamSession::State {
   RunOptions opt;
   std::unique_ptr<RunScorer> scorer;
   std::vector<int> truth;         // scratch: the scan's truths
+  std::vector<int> mover;         // scratch: the scan's movers (-1: none)
   std::vector<FeatureId> paired;  // scratch: the scan's pairings
+  std::vector<FeatureId> added;   // scratch: the landmarks the scan's observations made
   // Sequential map joining (RunOptions::submaps).
   std::unique_ptr<GlobalMap> global;
   std::vector<int> id_truth;  // landmark id -> its truth, kept when its local map is handed over
@@ -329,16 +331,19 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   res.association_s += assoc_s;
   res.budget_hits += r.diag.node_budget_hit;
   s.truth.clear();
+  s.mover.clear();
   s.paired.clear();
   for (std::size_t i = 0; i < scan.size(); ++i) {
     s.truth.push_back(scan[i].truth);
+    s.mover.push_back(scan[i].mover);
     s.paired.push_back(r.outcome[i] == node::Outcome::kPaired ? r.feature[i] : kNewFeature);
   }
   const int tp0 = res.score.tp, fp0 = res.score.fp;
-  sc.score(s.truth, s.paired);  // before this scan's new landmarks are added
+  sc.score(s.truth, s.paired, s.mover);  // before this scan's new landmarks are added
   const int scan_tp = res.score.tp - tp0, scan_fp = res.score.fp - fp0;
   res.relocalisations += reloc.relocalised;
   res.ambiguous_scans += reloc.ambiguous || r.loop.ambiguous;
+  s.added.assign(scan.size(), kNewFeature);
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const node::Outcome o = s.result.outcome[i];
     // A full map is a state, as on the device: the observation is not added, and counted.
@@ -347,8 +352,10 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
     if (static_cast<std::size_t>(s.result.feature[i]) != sc.ids()) {
       throw std::runtime_error("landmark ids are not handed out in order");
     }
-    sc.added(s.result.feature[i], scan[i].truth);
+    sc.added(s.result.feature[i], scan[i].truth, scan[i].mover);
+    s.added[i] = s.result.feature[i];
   }
+  if (s.opt.on_scan) s.opt.on_scan(ScanOutcome{t_s, &scan, &s.paired, &s.added});
   res.merges += s.result.review.merged;
   res.evicted += s.result.review.evicted;
   const Prediction<double, EB>& pred = s.step.prediction();

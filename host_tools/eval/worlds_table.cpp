@@ -96,4 +96,63 @@ std::string non_inferiority_markdown(const std::vector<WorldOutcome>& worlds) {
   return out;
 }
 
+namespace {
+std::vector<std::string> first_seen(const std::vector<WorldStrategyOutcome>& ws, bool family) {
+  std::vector<std::string> order;
+  for (const WorldStrategyOutcome& w : ws) {
+    const std::string& k = family ? w.family : w.strategy;
+    if (std::find(order.begin(), order.end(), k) == order.end()) order.push_back(k);
+  }
+  return order;
+}
+
+std::string strategy_row(const std::string& family, const std::string& strategy,
+                         const std::vector<const WorldStrategyOutcome*>& ws) {
+  std::vector<double> f1, err;
+  int tp = 0, fp = 0, fn = 0, clutter = 0, mover = 0, in_map = 0;
+  for (const WorldStrategyOutcome* w : ws) {
+    f1.push_back(w->f1);
+    err.push_back(w->err);
+    tp += w->tp;
+    fp += w->fp;
+    fn += w->fn;
+    clutter += w->fp_clutter;
+    mover += w->fp_mover;
+    in_map += w->movers_in_map;
+  }
+  const double pooled = tp == 0 ? 0.0 : 2.0 * tp / (2.0 * tp + fp + fn);
+  char line[512];
+  std::snprintf(line, sizeof line, "| %s | %s | %zu | %.4f | %.4f | %.2f | %d | %d | %d | %d |\n", family.c_str(),
+                strategy.c_str(), ws.size(), median(f1), pooled, median(err), fp, clutter, mover, in_map);
+  return line;
+}
+}  // namespace
+
+std::string strategies_markdown(const std::vector<WorldStrategyOutcome>& worlds) {
+  std::string out =
+      "Every strategy per family of generated worlds: F1 (median over the worlds, and pooled over their pairs), pose "
+      "error (median; the norm of the run's mean |x| and |y| errors), and sums over the worlds' runs of the false "
+      "pairs (FP), of those clutter paired, of those a mover's observation paired (FP mover), and the landmarks made "
+      "from movers still mapped at the end.\n\n"
+      "| family | strategy | worlds | F1 median | F1 pooled | pose err [m] | FP | FP clutter | FP mover | movers in "
+      "map |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  const std::vector<std::string> families = first_seen(worlds, true), strategies = first_seen(worlds, false);
+  for (const std::string& f : families)
+    for (const std::string& st : strategies) {
+      std::vector<const WorldStrategyOutcome*> ws;
+      for (const WorldStrategyOutcome& w : worlds)
+        if (w.family == f && w.strategy == st) ws.push_back(&w);
+      if (!ws.empty()) out += strategy_row(f, st, ws);
+    }
+  if (families.size() > 1) {
+    for (const std::string& st : strategies) {
+      std::vector<const WorldStrategyOutcome*> ws;
+      for (const WorldStrategyOutcome& w : worlds)
+        if (w.strategy == st) ws.push_back(&w);
+      out += strategy_row("total", st, ws);
+    }
+  }
+  return out;
+}
+
 }  // namespace geojcbb::host

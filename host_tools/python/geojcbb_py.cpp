@@ -185,6 +185,7 @@ const char* outcome_name(node::Outcome o) {
     case node::Outcome::kNewDropped: return "new_dropped";
     case node::Outcome::kUnmatched: return "unmatched";
     case node::Outcome::kNotAugmented: return "not_augmented";
+    case node::Outcome::kMover: return "mover";
   }
   return "?";
 }

@@ -66,6 +66,60 @@ std::vector<Eigen::Vector2d> landmarks(const nlohmann::json& j) {
   }
   return out;
 }
+// Movers: [{"index", "vx_mps", "vy_mps", "period_s"} (out and back) or {"index", "legs": [[x, y,
+// speed_mps, dwell_s], ...]} (walk and stand)], each landmark at most once.
+std::vector<Scenario::Mover> movers(const nlohmann::json& a, std::size_t landmarks) {
+  std::vector<Scenario::Mover> out;
+  std::vector<bool> taken(landmarks, false);
+  for (const auto& m : a) {
+    Scenario::Mover mv;
+    mv.index = m.at("index").get<int>();
+    if (mv.index < 0 || mv.index >= static_cast<int>(landmarks) || taken[static_cast<std::size_t>(mv.index)]) {
+      throw std::runtime_error("movers: an index is out of range or taken twice");
+    }
+    taken[static_cast<std::size_t>(mv.index)] = true;
+    for (const auto& l : m.value("legs", nlohmann::json::array())) {
+      if (!l.is_array() || l.size() != 4) throw std::runtime_error("movers.legs: expected [x, y, speed_mps, dwell_s]");
+      Scenario::Mover::Leg leg;
+      leg.to = Eigen::Vector2d(l[0].get<double>(), l[1].get<double>());
+      leg.speed_mps = l[2].get<double>();
+      leg.dwell_s = l[3].get<double>();
+      if (!leg.to.allFinite() || !(leg.speed_mps > 0) || !(leg.dwell_s >= 0) || !std::isfinite(leg.dwell_s)) {
+        throw std::runtime_error("movers.legs: a speed or dwell is out of range");
+      }
+      mv.legs.push_back(leg);
+    }
+    if (mv.legs.empty()) {
+      mv.v = Eigen::Vector2d(m.value("vx_mps", 0.0), m.value("vy_mps", 0.0));
+      mv.period_s = m.at("period_s").get<double>();
+      if (!mv.v.allFinite() || !(mv.period_s > 0)) throw std::runtime_error("movers: a period is out of range");
+    }
+    out.push_back(mv);
+  }
+  return out;
+}
+
+// "detection": {"model": "beams", "beam_deg", "p_by_beams"} with "landmark_diameters_m" (a number for
+// every landmark, or one per landmark); "model": "constant" (the default) keeps detection_probability.
+void detection(const nlohmann::json& j, Scenario& s) {
+  if (!j.contains("detection")) return;
+  const auto& d = j.at("detection");
+  const std::string model = d.value("model", std::string("constant"));
+  if (model == "constant") return;
+  if (model != "beams") throw std::runtime_error("detection.model: \"constant\" or \"beams\"");
+  s.detection_by_beams = true;
+  s.beam_rad = d.value("beam_deg", s.beam_rad * 180 / kPi<double>) * kPi<double> / 180;
+  s.p_by_beams = d.value("p_by_beams", s.p_by_beams);
+  const auto& dia = j.at("landmark_diameters_m");
+  s.diameters_m =
+      dia.is_number() ? std::vector<double>(s.landmarks.size(), dia.get<double>()) : dia.get<std::vector<double>>();
+  const auto bad = [](double v) { return !(v >= 0 && v <= 1); };
+  if (!(s.beam_rad > 0) || s.p_by_beams.empty() || std::any_of(s.p_by_beams.begin(), s.p_by_beams.end(), bad) ||
+      s.diameters_m.size() != s.landmarks.size() ||
+      std::any_of(s.diameters_m.begin(), s.diameters_m.end(), [](double v) { return !(v > 0) || !std::isfinite(v); })) {
+    throw std::runtime_error("detection: beam_deg, p_by_beams or landmark_diameters_m out of range");
+  }
+}
 }  // namespace
 
 Scenario load_scenario(const std::string& path) {
@@ -120,16 +174,8 @@ Scenario load_scenario(const std::string& path) {
       s.burst_every_s = b.value("every_s", 0.0);
       s.burst_per_scan = b.at("per_scan").get<double>();
     }
-    for (const auto& m : j.value("movers", nlohmann::json::array())) {  // {"index", "vx_mps", "vy_mps", "period_s"}
-      Scenario::Mover mv;
-      mv.index = m.at("index").get<int>();
-      mv.v = Eigen::Vector2d(m.value("vx_mps", 0.0), m.value("vy_mps", 0.0));
-      mv.period_s = m.at("period_s").get<double>();
-      if (mv.index < 0 || mv.index >= static_cast<int>(s.landmarks.size()) || !mv.v.allFinite() || !(mv.period_s > 0)) {
-        throw std::runtime_error("movers: an index or period is out of range");
-      }
-      s.movers.push_back(mv);
-    }
+    s.movers = movers(j.value("movers", nlohmann::json::array()), s.landmarks.size());
+    detection(j, s);
   } catch (const std::exception& e) {  // JSON errors and our own field checks, with the path
     throw std::runtime_error(path + ": " + e.what());
   }
@@ -143,26 +189,57 @@ Scenario load_scenario(const std::string& path) {
   return s;
 }
 
-Eigen::Vector2d landmark_at(const Scenario& s, std::size_t j, double t_s) {
-  Eigen::Vector2d p = s.landmarks[j];
-  for (const Scenario::Mover& m : s.movers) {
-    if (static_cast<std::size_t>(m.index) != j) continue;
-    const double phase = std::fmod(t_s, m.period_s) / m.period_s;  // out for the first half, back for the second
-    p += m.v * (m.period_s * (phase < 0.5 ? phase : 1 - phase));
+namespace {
+// Where a walk-and-stand mover is at t: leg after leg from `from`, each walked at its speed, then
+// stood for its dwell; after the last, standing.
+Eigen::Vector2d walk_at(const Scenario::Mover& m, Eigen::Vector2d from, double t_s) {
+  for (const Scenario::Mover::Leg& l : m.legs) {  // <= legs
+    const double walk_s = (l.to - from).norm() / l.speed_mps;
+    if (t_s < walk_s) return from + (l.to - from) * (t_s / walk_s);
+    t_s -= walk_s + l.dwell_s;
+    from = l.to;
+    if (t_s < 0) return from;
   }
-  return p;
+  return from;
+}
+}  // namespace
+
+Eigen::Vector2d landmark_at(const Scenario& s, std::size_t j, double t_s) {
+  const int k = mover_of(s, j);
+  if (k < 0) return s.landmarks[j];
+  const Scenario::Mover& m = s.movers[static_cast<std::size_t>(k)];
+  if (!m.legs.empty()) return walk_at(m, s.landmarks[j], t_s);
+  const double phase = std::fmod(t_s, m.period_s) / m.period_s;  // out for the first half, back for the second
+  return s.landmarks[j] + m.v * (m.period_s * (phase < 0.5 ? phase : 1 - phase));
+}
+
+int mover_of(const Scenario& s, std::size_t j) {
+  for (std::size_t k = 0; k < s.movers.size(); ++k)
+    if (static_cast<std::size_t>(s.movers[k].index) == j) return static_cast<int>(k);
+  return -1;
+}
+
+double detection_probability_at(const Scenario& s, std::size_t j, double range_m) {
+  if (!s.detection_by_beams) return s.detection_probability;
+  const double n = 2 * std::atan(s.diameters_m[j] / (2 * range_m)) / s.beam_rad;  // beams covered
+  const std::vector<double>& p = s.p_by_beams;
+  const auto last = static_cast<double>(p.size() - 1);
+  if (n >= last) return p.back();
+  const auto k = static_cast<std::size_t>(n);
+  const double f = n - static_cast<double>(k);
+  return (1 - f) * p[k] + f * p[k + 1];
 }
 
 Simulator::Simulator(const Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) {
   const Eigen::Vector2d d = s_.waypoints[1] - s_.waypoints[0];
   x_ = {s_.waypoints[0].x(), s_.waypoints[0].y(), std::atan2(d.y(), d.x())};
+  for (std::size_t j = 0; j < s_.landmarks.size(); ++j) mover_of_.push_back(mover_of(s_, j));
 }
 
 bool Simulator::step(SimStep& out) {
   if (lap_ >= s_.laps) return false;
   if (s_.duration_s > 0 && static_cast<double>(k_) * s_.dt_s >= s_.duration_s) return false;
-  std::normal_distribution<double> g(0, 1);
-  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> g(0, 1);  // two draws: no value cached into observe_landmarks' own
   // Steer toward the current waypoint.
   const Eigen::Vector2d to = s_.waypoints[target_] - Eigen::Vector2d(x_.x, x_.y);
   const double err = wrap_angle(std::atan2(to.y(), to.x()) - x_.theta);
@@ -189,15 +266,30 @@ bool Simulator::step(SimStep& out) {
   if (!out.scan) return true;
   const Eigen::Matrix2d R =
       Eigen::Vector2d(s_.sigma_range_m * s_.sigma_range_m, s_.sigma_bearing_rad * s_.sigma_bearing_rad).asDiagonal();
+  observe_landmarks(out, R);
+  add_clutter(out, R);
+  std::shuffle(out.observations.begin(), out.observations.end(), rng_);
+  return true;
+}
+
+void Simulator::observe_landmarks(SimStep& out, const Eigen::Matrix2d& R) {
+  std::normal_distribution<double> g(0, 1);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double k = s_.noise_scale;
   for (std::size_t j = 0; j < s_.landmarks.size(); ++j) {
     const Vec2<double> z = observe(x_, Mount<double>{s_.sensor_x_m, s_.sensor_y_m, s_.sensor_theta_rad},
                                    Vec2<double>(landmark_at(s_, j, out.t_s)));
     if (z.x() > s_.max_range_m || z.x() < s_.min_range_m || std::abs(z.y()) > 0.5 * s_.fov_rad) continue;
-    if (u(rng_) >= s_.detection_probability) continue;
+    if (u(rng_) >= detection_probability_at(s_, j, z.x())) continue;
+    const int mover = mover_of_[j];  // a mover is not a landmark: labelled as its own, truth -1
     out.observations.push_back({Eigen::Vector2d(z.x() + k * s_.sigma_range_m * g(rng_),
                                                 wrap_angle(z.y() + k * s_.sigma_bearing_rad * g(rng_))),
-                                static_cast<int>(j), R});
+                                mover < 0 ? static_cast<int>(j) : -1, R, mover});
   }
+}
+
+void Simulator::add_clutter(SimStep& out, const Eigen::Matrix2d& R) {
+  std::uniform_real_distribution<double> u(0, 1);
   std::poisson_distribution<int> clutter(s_.clutter_per_scan);
   for (int c = clutter(rng_); c > 0; --c) {
     // Uniform over the annulus sector between min and max range.
@@ -206,24 +298,20 @@ bool Simulator::step(SimStep& out) {
     out.observations.push_back({Eigen::Vector2d(r, (u(rng_) - 0.5) * s_.fov_rad), -1, R});
   }
   const double since = out.t_s - s_.burst_t_s;
-  if (s_.burst_per_scan > 0 && since >= 0) {
-    const long burst = s_.burst_every_s > 0 ? static_cast<long>(since / s_.burst_every_s) : 0;
-    const double into = s_.burst_every_s > 0 ? since - static_cast<double>(burst) * s_.burst_every_s : since;
-    if (into < s_.burst_duration_s) {
-      if (burst != burst_) {  // a new burst: its sector
-        burst_ = burst;
-        burst_bearing_ = (u(rng_) - 0.5) * (s_.fov_rad - 30 * kPi<double> / 180);
-      }
-      std::poisson_distribution<int> more(s_.burst_per_scan);
-      for (int c = more(rng_); c > 0; --c) {
-        const double r = s_.min_range_m + (s_.max_range_m - s_.min_range_m) * u(rng_);
-        const double b = burst_bearing_ + (u(rng_) - 0.5) * 30 * kPi<double> / 180;
-        out.observations.push_back({Eigen::Vector2d(r, b), -1, R});
-      }
-    }
+  if (!(s_.burst_per_scan > 0 && since >= 0)) return;
+  const long burst = s_.burst_every_s > 0 ? static_cast<long>(since / s_.burst_every_s) : 0;
+  const double into = s_.burst_every_s > 0 ? since - static_cast<double>(burst) * s_.burst_every_s : since;
+  if (into >= s_.burst_duration_s) return;
+  if (burst != burst_) {  // a new burst: its sector
+    burst_ = burst;
+    burst_bearing_ = (u(rng_) - 0.5) * (s_.fov_rad - 30 * kPi<double> / 180);
   }
-  std::shuffle(out.observations.begin(), out.observations.end(), rng_);
-  return true;
+  std::poisson_distribution<int> more(s_.burst_per_scan);
+  for (int c = more(rng_); c > 0; --c) {
+    const double r = s_.min_range_m + (s_.max_range_m - s_.min_range_m) * u(rng_);
+    const double b = burst_bearing_ + (u(rng_) - 0.5) * 30 * kPi<double> / 180;
+    out.observations.push_back({Eigen::Vector2d(r, b), -1, R});
+  }
 }
 
 }  // namespace geojcbb::host

@@ -38,9 +38,15 @@ const std::vector<WorldFamily> kFamilies{
      "60 landmarks in a 60 m square; from 10-30 s on, for 3-8 s of every 20-40 s, 10-25 more clutter returns per scan "
      "within a 30-degree sector, two laps"},
     {"movers",
-     "60 landmarks in a 60 m square, 4-10 of them moving out and back at 0.05-0.3 m/s over a period of 20-80 s, two "
-     "laps"},
+     "60 landmarks in a 60 m square, 4-10 of them moving out and back at 0.05-0.3 m/s over a period of 20-80 s, and "
+     "4-8 more walking like people: legs at 0.05-1.5 m/s, standing 0-20 s after each; a wanderer walks 2-20 s in a "
+     "random direction, a crosser (the first, then half the others) walks across the robot's path to a point 3-8 m "
+     "beyond it, leg after leg; two laps"},
     {"small", "15-30 landmarks in a 40 m square, two laps"},
+    {"far",
+     "40-60 trees in a 160-220 m square (at least 10 m apart), diameters 0.2-1.0 m, seen by a laser of range 40-50 m "
+     "with 0.5-degree beams: p_D 0, 0.2, 0.5, 0.8, 0.9 at 0, 1, 2, 3, 4+ beams covered (2 atan(d / 2r) / 0.5 "
+     "degrees), a square path of half the square's side, two laps"},
     {"large", "150-300 landmarks at one per 64 m^2 (a 100-140 m square), two laps"},
 };
 
@@ -110,6 +116,102 @@ void kidnap(Draw& d, Scenario& s) {
   s.kidnap_t_s = d.u(30, 60);
   s.kidnap_move =
       Eigen::Vector3d(dist * std::cos(dir), dist * std::sin(dir), d.u(30, 180) * kDeg * (d.u(0, 1) < 0.5 ? -1 : 1));
+}
+
+// The people of the movers family walk this long, leg after leg, and then stand (two laps of the
+// 40 m square take about 110 s).
+constexpr double kWalkHorizon_s = 400;
+
+// The next leg of a person standing at `here`: its speed and the standing after it drawn; a crosser
+// walks across one side of the robot's path (from a to along * len) to a point 3-8 m beyond it, near
+// where it crossed last (`at`, flipping `side`); a wanderer 2-20 s in a random direction, within
+// the field (half: its half side).
+struct Walk {
+  Eigen::Vector2d a, along, across;
+  double len = 0, at = 0, side = 1, half = 0;
+  bool crosser = false;
+  Scenario::Mover::Leg next(Draw& d, const Eigen::Vector2d& here) {
+    Scenario::Mover::Leg l;
+    l.speed_mps = d.u(0.05, 1.5);
+    l.dwell_s = d.u(0, 20);
+    if (crosser) {
+      side = -side;
+      at = std::clamp(at + d.u(-4, 4), 0.1 * len, 0.9 * len);
+      l.to = a + at * along + side * d.u(3, 8) * across;
+    } else {
+      const double dir = d.u(-180, 180) * kDeg, walk_s = d.u(2, 20);
+      l.to = (here + Eigen::Vector2d(std::cos(dir), std::sin(dir)) * (l.speed_mps * walk_s)).cwiseMax(-half);
+      l.to = l.to.cwiseMin(half);
+    }
+    return l;
+  }
+};
+
+// A person (Walk), walking leg after leg for kWalkHorizon_s from `start` (drawn here: beside the
+// path for a crosser, anywhere in the field for a wanderer).
+Scenario::Mover person(Draw& d, bool crosser, const std::vector<Eigen::Vector2d>& path, double half,
+                       Eigen::Vector2d& start) {
+  Walk w;
+  w.crosser = crosser;
+  w.half = half;
+  const int edge = d.i(0, static_cast<int>(path.size()) - 1);
+  w.a = path[static_cast<std::size_t>(edge)];
+  const Eigen::Vector2d b = path[(static_cast<std::size_t>(edge) + 1) % path.size()];
+  w.len = (b - w.a).norm();
+  w.along = (b - w.a) / w.len;
+  w.across = Eigen::Vector2d(-w.along.y(), w.along.x());
+  w.at = d.u(0.2, 0.8) * w.len;
+  w.side = d.u(0, 1) < 0.5 ? -1 : 1;
+  start = crosser ? Eigen::Vector2d(w.a + w.at * w.along + w.side * d.u(3, 8) * w.across)
+                  : Eigen::Vector2d(d.u(-half, half), d.u(-half, half));
+  Scenario::Mover m;
+  Eigen::Vector2d here = start;
+  for (double t = 0; t < kWalkHorizon_s && m.legs.size() < 1000;) {  // <= 1000 legs
+    const Scenario::Mover::Leg l = w.next(d, here);
+    t += (l.to - here).norm() / l.speed_mps + l.dwell_s;
+    here = l.to;
+    m.legs.push_back(l);
+  }
+  return m;
+}
+
+// The movers family: 60 landmarks in a 60 m square; 4-10 go out and back slowly (the landmarks
+// 0..n-1: the field's order is random), 4-8 more walk like people (the next ones, moved to where
+// each person starts).
+void movers(Draw& d, Scenario& s) {
+  s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
+  s.waypoints = square(20);
+  const int n = d.i(4, 10);
+  for (int k = 0; k < n; ++k) {
+    Scenario::Mover m;
+    m.index = k;
+    const double speed = d.u(0.05, 0.3), dir = d.u(-180, 180) * kDeg;
+    m.v = Eigen::Vector2d(speed * std::cos(dir), speed * std::sin(dir));
+    m.period_s = d.u(20, 80);
+    s.movers.push_back(m);
+  }
+  const int people = d.i(4, 8);
+  for (int q = 0; q < people && n + q < static_cast<int>(s.landmarks.size()); ++q) {
+    const bool crosser = q == 0 || d.u(0, 1) < 0.5;
+    Eigen::Vector2d start;
+    Scenario::Mover m = person(d, crosser, s.waypoints, 29, start);
+    m.index = n + q;
+    s.landmarks[static_cast<std::size_t>(m.index)] = start;
+    s.movers.push_back(m);
+  }
+}
+
+// The far family: few trees, most seen beyond 20 m, each detected by the beams it covers.
+void far(Draw& d, Scenario& s) {
+  const int n = d.i(40, 60);
+  const double half = 0.5 * d.u(160, 220);
+  s.landmarks = field(d, n, -half, half, -half, half, 10);
+  s.waypoints = square(0.5 * half);
+  s.max_range_m = d.u(40, 50);
+  s.detection_by_beams = true;
+  s.beam_rad = 0.5 * kDeg;
+  s.p_by_beams = {0.0, 0.2, 0.5, 0.8, 0.9};
+  for (std::size_t k = 0; k < s.landmarks.size(); ++k) s.diameters_m.push_back(d.u(0.2, 1.0));
 }
 
 }  // namespace
@@ -186,20 +288,12 @@ Scenario draw_world(const std::string& family, std::uint64_t seed) {
     s.burst_every_s = d.u(20, 40);
     s.burst_per_scan = d.u(10, 25);
   } else if (family == "movers") {
-    s.landmarks = field(d, 60, -30, 30, -30, 30, 4);
-    s.waypoints = square(20);
-    const int n = d.i(4, 10);
-    for (int k = 0; k < n; ++k) {
-      Scenario::Mover m;
-      m.index = k;  // the field's order is random: any n of them
-      const double speed = d.u(0.05, 0.3), dir = d.u(-180, 180) * kDeg;
-      m.v = Eigen::Vector2d(speed * std::cos(dir), speed * std::sin(dir));
-      m.period_s = d.u(20, 80);
-      s.movers.push_back(m);
-    }
+    movers(d, s);
   } else if (family == "small") {
     s.landmarks = field(d, d.i(15, 30), -20, 20, -20, 20, 4);
     s.waypoints = square(12);
+  } else if (family == "far") {
+    far(d, s);
   } else if (family == "large") {
     const int n = d.i(150, 300);
     const double half = 0.5 * std::sqrt(64.0 * n);
@@ -257,9 +351,19 @@ void save_scenario(const Scenario& s, const std::string& path) {
   if (!s.movers.empty()) {
     nlohmann::json mv = nlohmann::json::array();
     for (const Scenario::Mover& m : s.movers) {
-      mv.push_back({{"index", m.index}, {"vx_mps", m.v.x()}, {"vy_mps", m.v.y()}, {"period_s", m.period_s}});
+      if (m.legs.empty()) {
+        mv.push_back({{"index", m.index}, {"vx_mps", m.v.x()}, {"vy_mps", m.v.y()}, {"period_s", m.period_s}});
+        continue;
+      }
+      nlohmann::json legs = nlohmann::json::array();
+      for (const Scenario::Mover::Leg& l : m.legs) legs.push_back({l.to.x(), l.to.y(), l.speed_mps, l.dwell_s});
+      mv.push_back({{"index", m.index}, {"legs", legs}});
     }
     j["movers"] = mv;
+  }
+  if (s.detection_by_beams) {
+    j["detection"] = {{"model", "beams"}, {"beam_deg", s.beam_rad / kDeg}, {"p_by_beams", s.p_by_beams}};
+    j["landmark_diameters_m"] = s.diameters_m;
   }
   nlohmann::json lm = nlohmann::json::array(), wp = nlohmann::json::array();
   for (const Eigen::Vector2d& p : s.landmarks) lm.push_back({p.x(), p.y()});

@@ -13,6 +13,7 @@
 #include "geojcbb_host/report.hpp"
 #include "geojcbb/node/slam_step.hpp"
 #include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/worlds.hpp"
 
 using namespace geojcbb;
 using namespace geojcbb::host;
@@ -84,6 +85,45 @@ TEST_CASE("scorer: a false pair is counted by place, within the observed landmar
   CHECK(r.fp_other_group == 2);
   CHECK(r.group_score.tp == 2);  // the neighbour is right at group level
   CHECK(r.group_score.fp == 3);
+}
+
+TEST_CASE("scorer: a mover's observation paired is a false pair and an fp_mover; its landmarks counted while mapped") {
+  // True landmarks 0 and 1; map ids 0 and 1 from them, 2 and 3 from movers 0 and 1, 4 from clutter.
+  RunScorer sc(2, {});
+  sc.added(0, 0);
+  sc.added(1, 1);
+  sc.added(2, -1, 0);
+  sc.added(3, -1, 1);
+  sc.added(4, -1);
+  // Mover 0 paired with true 0's landmark and with its own; mover 1 unpaired; clutter paired with
+  // mover 1's landmark; true 1 right.
+  sc.score({-1, -1, -1, -1, 1}, {0, 2, -1, 3, 1}, {0, 0, 1, -1, -1});
+  sc.removed(3);
+  const RunResult r = sc.finish();
+  CHECK(r.score.tp == 1);
+  CHECK(r.score.fp == 3);
+  CHECK(r.score.tn == 1);
+  CHECK(r.fp_clutter == 3);
+  CHECK(r.fp_mover == 2);
+  CHECK(r.movers_in_map == 1);  // mover 0's; mover 1's left the map
+  CHECK(r.spurious_landmarks == 3);
+  CHECK_THROWS_AS(sc.score({-1}, {0}, {0, 1}), std::runtime_error);
+}
+
+TEST_CASE("movers world: TRUTH leaves every mover's observation unpaired, a strategy's pairs of them are counted") {
+  Scenario s = draw_world("movers", 7);
+  s.laps = 1;
+  RunOptions o;
+  o.oracle = true;
+  const RunResult t = run_slam(s, 1, o);
+  CHECK(t.fp_mover == 0);
+  CHECK(t.observations == t.score.tp + t.score.tn + t.score.fp + t.score.fn);
+  o.oracle = false;
+  o.step.strategy = Strategy::kJcbb;
+  const RunResult j = run_slam(s, 1, o);
+  CHECK(j.fp_mover > 0);  // slow movers are followed
+  CHECK(j.fp_mover <= j.fp_clutter);
+  CHECK(j.movers_in_map <= j.spurious_in_map);
 }
 
 TEST_CASE("report: a preset whose runs all failed is never scored, a run whose map filled is") {

@@ -4,6 +4,7 @@
 // the stated rule.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -52,7 +53,19 @@ TEST_CASE("worlds: every family draws the same world from the same seed, and a f
         CHECK(r.movers[k].index == a.movers[k].index);
         CHECK(r.movers[k].v == a.movers[k].v);
         CHECK(r.movers[k].period_s == a.movers[k].period_s);
+        REQUIRE(r.movers[k].legs.size() == a.movers[k].legs.size());
+        for (std::size_t q = 0; q < a.movers[k].legs.size(); ++q) {
+          CHECK(r.movers[k].legs[q].to == a.movers[k].legs[q].to);
+          CHECK(r.movers[k].legs[q].speed_mps == a.movers[k].legs[q].speed_mps);
+          CHECK(r.movers[k].legs[q].dwell_s == a.movers[k].legs[q].dwell_s);
+          CHECK(b.movers[k].legs[q].to == a.movers[k].legs[q].to);  // the same seed, the same walk
+        }
       }
+      CHECK(r.detection_by_beams == a.detection_by_beams);
+      CHECK(r.diameters_m == a.diameters_m);
+      CHECK(b.diameters_m == a.diameters_m);
+      CHECK(r.p_by_beams == a.p_by_beams);
+      CHECK(r.beam_rad == doctest::Approx(a.beam_rad).epsilon(1e-14));
     }
   }
   CHECK_THROWS_AS(draw_world("no_such_family", 1), std::invalid_argument);
@@ -86,9 +99,30 @@ TEST_CASE("worlds: the families' stated ranges hold over 20 seeds") {
     CHECK(b.burst_duration_s >= 3);
     CHECK(b.burst_duration_s < b.burst_every_s);
     const Scenario m = draw_world("movers", seed);
-    CHECK(m.movers.size() >= 4);
-    CHECK(m.movers.size() <= 10);
+    CHECK(m.movers.size() >= 8);  // 4-10 out and back, 4-8 people
+    CHECK(m.movers.size() <= 18);
+    int people = 0, crossers = 0;
     for (const Scenario::Mover& v : m.movers) {
+      if (!v.legs.empty()) {  // a person: legs at 0.05-1.5 m/s, standing 0-20 s, walking at least 400 s
+        ++people;
+        double t = 0;
+        Eigen::Vector2d here = m.landmarks[static_cast<std::size_t>(v.index)];
+        bool crossed = false;
+        for (const Scenario::Mover::Leg& l : v.legs) {
+          CHECK(l.speed_mps >= 0.05);
+          CHECK(l.speed_mps <= 1.5);
+          CHECK(l.dwell_s >= 0);
+          CHECK(l.dwell_s <= 20);
+          t += (l.to - here).norm() / l.speed_mps + l.dwell_s;
+          // crossing the robot's path (the square of half side 20): one end inside, the other outside
+          const bool in_here = here.cwiseAbs().maxCoeff() < 20, in_there = l.to.cwiseAbs().maxCoeff() < 20;
+          crossed = crossed || in_here != in_there;
+          here = l.to;
+        }
+        CHECK(t >= 400);
+        crossers += crossed;
+        continue;
+      }
       CHECK(v.v.norm() >= 0.05 - 1e-12);
       CHECK(v.v.norm() <= 0.3 + 1e-12);
       // out and back: where it started after each period, at most half a period's travel away between
@@ -98,6 +132,22 @@ TEST_CASE("worlds: the families' stated ranges hold over 20 seeds") {
       CHECK((landmark_at(m, static_cast<std::size_t>(v.index), 0.5 * v.period_s) -
              m.landmarks[static_cast<std::size_t>(v.index)])
                 .norm() == doctest::Approx(0.5 * v.period_s * v.v.norm()));
+    }
+    CHECK(people >= 4);
+    CHECK(people <= 8);
+    CHECK(crossers >= 1);
+    CHECK(m.movers.size() - static_cast<std::size_t>(people) >= 4);  // the slow out-and-back ones stay
+    CHECK(m.movers.size() - static_cast<std::size_t>(people) <= 10);
+    const Scenario f = draw_world("far", seed);
+    CHECK(f.landmarks.size() >= 40);
+    CHECK(f.landmarks.size() <= 60);
+    CHECK(f.max_range_m >= 40);
+    CHECK(f.max_range_m <= 50);
+    CHECK(f.detection_by_beams);
+    REQUIRE(f.diameters_m.size() == f.landmarks.size());
+    for (double dia : f.diameters_m) {
+      CHECK(dia >= 0.2);
+      CHECK(dia <= 1.0);
     }
     const Scenario l = draw_world("large", seed);
     CHECK(l.landmarks.size() >= 140);  // 150-300 drawn; a few may not fit the separation

@@ -491,17 +491,17 @@ TEST_CASE("protocol: ranges and positive definiteness") {
 }
 
 TEST_CASE("protocol: SHUTDOWN and CONFIG's periodic STATS on the wire") {
-  // CONFIG's last field, after the 158 bytes of the step's options.
+  // CONFIG's last field, after the 168 bytes of the step's options.
   const std::vector<SchemaField> cf = schema_fields(MsgType::kConfig);
   REQUIRE(cf.back().name == "stats_period_scans");
   CHECK(cf.back().type == "u16");
-  CHECK(cf.back().offset == 158);
+  CHECK(cf.back().offset == 168);
   Config c = sample<Config>();
   c.stats_period_scans = 0x0102;
   const Bytes pl = payload_of(c);
-  REQUIRE(pl.size() == 160);
-  CHECK(pl[158] == 0x02);
-  CHECK(pl[159] == 0x01);
+  REQUIRE(pl.size() == 170);
+  CHECK(pl[168] == 0x02);
+  CHECK(pl[169] == 0x01);
   CHECK(Config{}.stats_period_scans == 0);  // off unless asked for
   Config out{};
   REQUIRE(out.decode(pl.data(), pl.size()) == Error::kOk);

@@ -84,6 +84,10 @@ class Options(TypedDict, total=False):
     rjc_subset: int  # default 8
     occlusion_rad: float  # default 0
     static_gate_level: float  # default 0
+    motion_false_alarm: float  # default 0
+    detection_floor: float  # default 0
+    learn_detection: bool  # default 0
+    learn_clutter: bool  # default 0
     first_estimates_jacobians: bool  # default 1
     augment: bool  # default 1
     relocalise: bool  # default 0

@@ -65,6 +65,15 @@ inline constexpr bool kImageDuplicateMerge = false;
 inline constexpr bool kImageDuplicateMerge = true;
 #endif
 
+/// And the world model (docs/design.md, "The world model": the motion test, the movers, the learned
+/// detection and clutter; all off by default): the 128 KiB images leave it out
+/// (GEOJCBB_WITHOUT_WORLD_MODEL) until room is made for its 20 bytes a landmark and 6 KB of code.
+#ifdef GEOJCBB_WITHOUT_WORLD_MODEL
+inline constexpr bool kImageWorldModel = false;
+#else
+inline constexpr bool kImageWorldModel = true;
+#endif
+
 /// The optional stages a configuration compiles in. The hypothesis window and clusters first
 /// (StepSettings::hypothesis_rivals, cluster_first: about 7 KB of Cortex-M4 code) and the local
 /// map's hand-over (StepSettings::submap_*, node::Node's SUBMAP frames, ekf::Slam::restart: about
@@ -76,12 +85,15 @@ struct OptionalStages {
   static constexpr bool kHypotheses = kImageHypotheses;          ///< the hypothesis window and clusters first
   static constexpr bool kHandOver = true;                        ///< local maps closed, handed over, seeded
   static constexpr bool kDuplicateMerge = kImageDuplicateMerge;  ///< duplicate_merge_d2
+  /// motion_false_alarm, learn_detection, learn_clutter, detection_floor
+  static constexpr bool kWorldModel = kImageWorldModel;
 };
 template <>
 struct OptionalStages<SmallControllerBounds> {
   static constexpr bool kHypotheses = false;
   static constexpr bool kHandOver = false;
   static constexpr bool kDuplicateMerge = kImageDuplicateMerge;
+  static constexpr bool kWorldModel = false;
 };
 
 }  // namespace geojcbb

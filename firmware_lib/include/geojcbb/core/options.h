@@ -86,6 +86,14 @@
     "a landmark with a nearer one within this bearing is hidden, so not expected (0: off)") \
   X(F64, static_gate_level, 0, (ROPEN, 0, 1), "", "--static-gate-level", \
     "remove a landmark whose estimate leaves, at this chi-square level, where it was added (0: off)") \
+  X(F64, motion_false_alarm, 0, (ROPEN, 0, 1), "", "--motion-false-alarm", \
+    "the motion test's false-alarm rate per pairing: a landmark whose innovations keep one direction becomes a mover (0: off)") \
+  X(F32, detection_floor, 0, (CLOSED, 0, 1), "", "--detection-floor", \
+    "a miss counts against a landmark only where its p_D is at least this (0: every miss)") \
+  X(BOOL, learn_detection, 0, (ANY, 0, 0), "", "--learn-detection", \
+    "p_D per range bin learned from the confirmed landmarks in view (prior: loop_detection_probability)") \
+  X(BOOL, learn_clutter, 0, (ANY, 0, 0), "", "--learn-clutter", \
+    "the clutter density learned from each scan's unexplained observations (prior: loop_unexplained_density)") \
   X(BOOL, first_estimates_jacobians, 1, (ANY, 0, 0), "", "--fej", \
     "first-estimates Jacobians (off: every Jacobian at the current estimate); applied at the next reset") \
   X(BOOL, augment, 1, (ANY, 0, 0), "", "", \

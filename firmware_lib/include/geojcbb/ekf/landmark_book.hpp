@@ -17,6 +17,7 @@
 #include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/settings.hpp"
+#include "geojcbb/ekf/motion_test.hpp"
 
 namespace geojcbb::ekf {
 
@@ -50,6 +51,11 @@ struct LandmarkPolicy {
   float clutter_density = 0.003f;
   float gate_d2 = 9.21f;  ///< the association's individual gate (the area p_FA is taken over)
   float static_gate_d2 = 0.0f;
+  /// A miss counts only where p_D is at least this (0: every miss): a landmark the sensor can hardly
+  /// see is no evidence of absence (ekf/detection.hpp).
+  float detection_floor = 0.0f;
+  bool learn_detection = false;  ///< p_D per range bin learned from the scans (ekf/detection.hpp)
+  bool learn_clutter = false;    ///< the clutter density learned from the scans (ekf/detection.hpp)
   /// The log-odds a landmark can bank (confirm_nats + reserve_nats), in T: the book's saturation and
   /// a seed's cap (node::seed_map) are the one number.
   template <typename T>
@@ -60,7 +66,8 @@ struct LandmarkPolicy {
     return delete_nats < 0.0f && delete_nats > -1e30f && confirm_nats > 0.0f && confirm_nats < 1e30f &&
            reserve_nats >= 0.0f && reserve_nats < 1e30f && max_tentative_reviews >= 1 && max_tentative_reviews <= 255 &&
            p_detect > 0.0f && p_detect < 1.0f && clutter_density > 0.0f && clutter_density < 1e30f && gate_d2 > 0.0f &&
-           gate_d2 < 1e30f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f;
+           gate_d2 < 1e30f && static_gate_d2 >= 0.0f && static_gate_d2 < 1e30f && detection_floor >= 0.0f &&
+           detection_floor <= 1.0f;
   }
 };
 /// LandmarkPolicy's members that are options of the table, (member, option); node::SlamStep::configure
@@ -72,7 +79,10 @@ struct LandmarkPolicy {
   F(confirm_nats, landmark_confirm_nats)               \
   F(delete_nats, landmark_delete_nats)                 \
   F(reserve_nats, landmark_reserve_nats)               \
-  F(max_tentative_reviews, max_tentative_reviews)
+  F(max_tentative_reviews, max_tentative_reviews)      \
+  F(detection_floor, detection_floor)                  \
+  F(learn_detection, learn_detection)                  \
+  F(learn_clutter, learn_clutter)
 // clang-format on
 /// out's options of the table from the settings `in` (core/settings.hpp, GEOJCBB_BIND_OPTION).
 template <class In>
@@ -91,6 +101,10 @@ struct ExistenceEvidence {
       : log_pd(fmath::log(T(p.p_detect))),
         log_miss(fmath::log(T(1) - T(p.p_detect))),
         area_coeff(T(p.clutter_density) * kPi<T> * T(p.gate_d2)) {}
+  /// The same with p_D and the clutter density of a learned model (ekf/detection.hpp): log p_D and
+  /// log(1 - p_D) per landmark then (hit_pd, miss_pd).
+  ExistenceEvidence(const LandmarkPolicy& p, T density)
+      : log_pd(T(0)), log_miss(T(0)), area_coeff(density * kPi<T> * T(p.gate_d2)) {}
   /// p_FA for a gate of |S| (range, bearing) at range r (r2_det = r^2 |S|), within [1e-9, 0.5]: a
   /// gate half full of clutter makes a detection little evidence, and never evidence against.
   T pfa(T r2_det) const {
@@ -99,6 +113,8 @@ struct ExistenceEvidence {
   }
   T hit(T pfa) const { return log_pd - fmath::log(pfa); }
   T miss(T pfa) const { return log_miss - fmath::log(T(1) - pfa); }
+  static T hit_pd(T pd, T pfa) { return fmath::log(pd) - fmath::log(pfa); }
+  static T miss_pd(T pd, T pfa) { return fmath::log(T(1) - pd) - fmath::log(T(1) - pfa); }
 };
 
 /// What one review did.
@@ -110,6 +126,7 @@ struct ReviewStats {
   int removed_moved = 0;   ///< of those, removed by the static-gate rule
   int merged = 0;          ///< landmarks merged into another (node::SlamStep: a loop closure's duplicates)
   int evicted = 0;         ///< landmarks evicted to make room in a full map (node::SlamStep: evict_when_full)
+  int movers = 0;          ///< landmarks that failed the motion test and left as movers (node::SlamStep)
   int confirmed = 0;       ///< landmarks confirmed by this review
 };
 /// Why the current review removes a landmark whatever its counters say.
@@ -125,10 +142,21 @@ enum LandmarkFlag : std::uint8_t {
   kKnownFlag = 2,      ///< known beforehand (a surveyed map): never removed by the evidence
 };
 
-/// One landmark. Members ordered by alignment (scalars, then the id, then the counters), so the
-/// only padding is at the end: 35 bytes of members and 1 of padding for float, 59 and 5 for double.
+/// The motion test's part of a landmark record: its evidence (ekf/motion_test.hpp), or nothing in a
+/// configuration without the world model (core/capacity.hpp, OptionalStages::kWorldModel; an empty
+/// base takes no room).
+template <typename T, bool Motion>
+struct MotionPart {
+  MotionEvidence<T> motion;  ///< the motion test's evidence
+};
 template <typename T>
-struct LandmarkRecord {
+struct MotionPart<T, false> {};
+
+/// One landmark. Members ordered by alignment (the motion part's scalars, the scalars, then the id,
+/// then the counters), so the only padding is at the end: 35 bytes of members and 1 of padding for
+/// float (55 and 1 with the motion part), 59 and 5 for double (99 and 5).
+template <typename T, bool Motion = true>
+struct LandmarkRecord : MotionPart<T, Motion> {
   T l0[2];                 ///< first estimate [m] (world frame): FEJ's linearisation point, the static gate's l0
   T P0[3];                 ///< its covariance when added [m^2]: xx, xy, yy (the static gate's P0)
   T exist;                 ///< log-odds that it exists [nats] (LandmarkPolicy), saturating
@@ -141,7 +169,8 @@ struct LandmarkRecord {
   Drop drop;               ///< review scratch: set by count() and the filter's static gate
 };
 // The device's RAM budget counts on it (GEOJCBB_SLAM_STORAGE_SIZE): no padding.
-static_assert(sizeof(LandmarkRecord<float>) == 36, "LandmarkRecord<float>: 36 bytes of members, no padding");
+static_assert(sizeof(LandmarkRecord<float, false>) == 36, "LandmarkRecord<float>: 36 bytes of members, no padding");
+static_assert(sizeof(LandmarkRecord<float, true>) == 56, "LandmarkRecord<float>: 56 bytes with the motion part");
 
 /// The landmarks removed since LandmarkBook::clear_removed(), by every rule (the review, a merge, an
 /// eviction, a restart): how many, and the ids of the first kMaxIds of them. A device reports a
@@ -154,9 +183,12 @@ struct RemovedIds {
 
 /// @tparam T             scalar of the records
 /// @tparam MaxLandmarks  capacity
-template <typename T, int MaxLandmarks>
+/// @tparam Motion        the records carry the motion test's evidence (OptionalStages::kWorldModel)
+template <typename T, int MaxLandmarks, bool Motion = true>
 class LandmarkBook {
  public:
+  using Record = LandmarkRecord<T, Motion>;
+
   /// The largest id: add() refuses (full()) once it has been handed out.
   static constexpr FeatureId kMaxId = 0x7fffffff;
 
@@ -174,8 +206,8 @@ class LandmarkBook {
   FeatureId next_id() const { return next_id_; }
   /// No room for another landmark: MaxLandmarks are mapped, or the ids are used up.
   bool full() const { return n_ >= MaxLandmarks || next_id_ == kMaxId; }
-  const LandmarkRecord<T>& operator[](int j) const { return rec_[j]; }
-  LandmarkRecord<T>& operator[](int j) { return rec_[j]; }
+  const Record& operator[](int j) const { return rec_[j]; }
+  Record& operator[](int j) { return rec_[j]; }
 
   /// The index of the landmark with this id, or -1 when there is none (never mapped, or removed).
   [[gnu::noinline]] int index_of(FeatureId id) const {
@@ -195,12 +227,13 @@ class LandmarkBook {
   /// Precondition: !full().
   /// @return its id
   FeatureId add(const Vec2<T>& l, const Mat2<T>& P0, bool known = false) {
-    LandmarkRecord<T>& r = rec_[n_];
+    Record& r = rec_[n_];
     r.l0[0] = l.x();
     r.l0[1] = l.y();
     r.P0[0] = P0(0, 0);
     r.P0[1] = P0(0, 1);
     r.P0[2] = P0(1, 1);
+    if constexpr (Motion) r.motion.clear();
     r.exist = T(0);
     r.id = next_id_;
     r.hits = 1;
@@ -231,7 +264,7 @@ class LandmarkBook {
   /// unless it is known (LandmarkPolicy).
   /// @return the landmark was confirmed by this review
   bool count(int j, bool in_view, bool paired, T evidence, const LandmarkPolicy& policy) {
-    LandmarkRecord<T>& r = rec_[j];
+    Record& r = rec_[j];
     if (!in_view && !paired) return false;
     if (r.expected < 65535) ++r.expected;
     if (paired) {
@@ -251,7 +284,7 @@ class LandmarkBook {
   int choose_kept(const LandmarkPolicy& policy, std::int16_t (&keep)[MaxLandmarks], ReviewStats& stats) {
     int kept = 0;
     for (int j = 0; j < n_; ++j) {  // <= MaxLandmarks
-      LandmarkRecord<T>& r = rec_[j];
+      Record& r = rec_[j];
       if (r.drop != Drop::kNone) {
         stats.removed_missed += r.drop == Drop::kMissed && confirmed(j);
         stats.removed_moved += r.drop == Drop::kMoved;
@@ -269,8 +302,8 @@ class LandmarkBook {
   /// the log-odds and the flags the larger (or: confirmed or known if either is). `into` keeps its
   /// id, first estimate and its P0.
   void absorb(int into, int from) {
-    LandmarkRecord<T>& a = rec_[into];
-    const LandmarkRecord<T>& b = rec_[from];
+    Record& a = rec_[into];
+    const Record& b = rec_[from];
     a.hits = static_cast<std::uint16_t>(std::min(65535, int(a.hits) + int(b.hits)));
     a.expected = static_cast<std::uint16_t>(std::min(65535, int(a.expected) + int(b.expected)));
     a.flags = static_cast<std::uint8_t>(a.flags | b.flags);
@@ -295,7 +328,7 @@ class LandmarkBook {
   }
 
  private:
-  std::array<LandmarkRecord<T>, MaxLandmarks> rec_{};
+  std::array<Record, MaxLandmarks> rec_{};
   RemovedIds removed_{};
   FeatureId next_id_ = 0;
   int n_ = 0;

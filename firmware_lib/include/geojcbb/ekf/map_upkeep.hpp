@@ -137,7 +137,7 @@ void Slam<T, B>::remove(int j) {
 
 template <typename T, class B>
 inline bool Slam<T, B>::moved(int j, T gate_d2) const {
-  const LandmarkRecord<T>& r = book_[j];
+  const auto& r = book_[j];
   const int l = Layout::landmark(j);
   const T a0 = r.P0[0] - cov(l, l) + kStaticFloor_m2, b0 = r.P0[1] - cov(l, l + 1),
           c0 = r.P0[2] - cov(l + 1, l + 1) + kStaticFloor_m2;
@@ -153,7 +153,14 @@ void Slam<T, B>::count_evidence(const Observations<T, B>& obs, const Prediction<
                                 ReviewStats& stats) {
   stats = ReviewStats{};
   book_.start_review();
-  const ExistenceEvidence<T> ev(policy);
+  constexpr bool kModel = OptionalStages<B>::kWorldModel;  // compiled out: configure() refused learning
+  const bool learn_pd = kModel && policy.learn_detection, learn_clutter = kModel && policy.learn_clutter;
+  if ((learn_pd || learn_clutter) && !detect_ready_) {
+    detect_.reset(T(policy.p_detect), T(policy.clutter_density), view.max_range_m);
+    detect_ready_ = true;
+  }
+  const ExistenceEvidence<T> ev =
+      learn_clutter ? ExistenceEvidence<T>(policy, detect_.density()) : ExistenceEvidence<T>(policy);
   const Mat2<T> R_miss = obs.count > 0 ? obs.R[0] : Mat2<T>::Zero();
   for (int a = 0; a < pred.count; ++a) {  // <= kMaxCandidates
     const int j = index_of(pred.id[a]);
@@ -161,18 +168,107 @@ void Slam<T, B>::count_evidence(const Observations<T, B>& obs, const Prediction<
     int i = 0;
     while (i < assoc.count && assoc.feature[i] != pred.id[a]) ++i;  // <= kMaxObservations
     const bool paired = i < assoc.count;
+    const T r = pred.h[a].x();
     const bool seen = ekf::in_view(pred, a, view);
-    stats.expected += seen;
+    const T pd = learn_pd ? detect_.pd(r) : T(policy.p_detect);
+    if (learn_pd && seen && book_.confirmed(j)) detect_.sighting(r, paired);
+    const bool informative = seen && !(pd < T(policy.detection_floor));  // a miss below the floor: nothing
+    stats.expected += informative;
     stats.paired += paired;
     T e = T(0);
-    if (paired || seen) {
+    if (paired || informative) {
       const Mat2<T> S = pred.C.block(a, a) + (paired ? obs.R[i] : R_miss);
-      const T r = pred.h[a].x();
       const T pfa = ev.pfa(r * r * (S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0)));
-      e = paired ? ev.hit(pfa) : ev.miss(pfa);
+      if (learn_pd) {
+        e = paired ? ExistenceEvidence<T>::hit_pd(pd, pfa) : ExistenceEvidence<T>::miss_pd(pd, pfa);
+      } else {
+        e = paired ? ev.hit(pfa) : ev.miss(pfa);
+      }
     }
-    stats.confirmed += book_.count(j, seen, paired, e, policy);
+    stats.confirmed += book_.count(j, informative, paired, e, policy);
     if (paired && policy.static_gate_d2 > 0.0f && moved(j, T(policy.static_gate_d2))) book_[j].drop = Drop::kMoved;
+  }
+  if (learn_clutter) {  // the scan's observations nothing explains, over the area in view
+    int unexplained = 0;
+    for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
+      unexplained += assoc.feature[i] == kNewFeature || assoc.feature[i] == kUnmatched;
+    }
+    const T r0 = view.min_range_m, r1 = view.max_range_m;
+    detect_.scan(unexplained, view.half_fov_rad * (r1 * r1 - r0 * r0));
+  }
+}
+
+template <typename T, class B>
+bool Slam<T, B>::motion_pair(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                             const Association<T, B>& assoc, int i, int& j, T (&delta)[2], T (&Sigma)[3],
+                             T (&info)[3]) const {
+  const FeatureId f = assoc.feature[i];
+  if (f < 0) return false;
+  int a = assoc.candidate[i];
+  if (a < 0 || a >= pred.count || pred.id[a] != f) {
+    a = -1;
+    for (int b = 0; b < pred.count && a < 0; ++b) a = pred.id[b] == f ? b : -1;  // <= kMaxCandidates
+  }
+  j = index_of(f);
+  if (a < 0 || j < 0) return false;
+  Vec2<T> nu = obs.z[i] - pred.h[a];
+  nu.y() = wrap_angle(nu.y());
+  const Mat2<T> S = pred.C.block(a, a) + obs.R[i];
+  const T alpha = x_[2] + mount_.theta + pred.h[a].y();  // the line of sight in the world
+  if (!world_innovation(nu, S, pred.h[a].x(), alpha, delta, Sigma)) return false;
+  const T det = Sigma[0] * Sigma[2] - Sigma[1] * Sigma[1];
+  if (!(det > T(0))) return false;
+  info[0] = Sigma[2] / det;
+  info[1] = -Sigma[1] / det;
+  info[2] = Sigma[0] / det;
+  return true;
+}
+
+template <typename T, class B>
+int Slam<T, B>::test_motion(const Observations<T, B>& obs, const Prediction<T, B>& pred, const Association<T, B>& assoc,
+                            T threshold, std::array<std::int16_t, B::kMaxObservations>& moved) {
+  if constexpr (!OptionalStages<B>::kWorldModel) {  // compiled out: configure() refused the option
+    (void)obs;
+    (void)pred;
+    (void)assoc;
+    (void)threshold;
+    (void)moved;
+    return 0;
+  } else {
+    // First pass: the scan's information and information-weighted innovation, summed over its pairs.
+    T Y[3] = {T(0), T(0), T(0)}, y[2] = {T(0), T(0)};
+    int pairs = 0;
+    for (int i = 0; i < assoc.count && i < obs.count; ++i) {  // <= kMaxObservations
+      int j = -1;
+      T d[2], D[3], I[3];
+      if (!motion_pair(obs, pred, assoc, i, j, d, D, I)) continue;
+      const T i00 = I[0], i01 = I[1], i11 = I[2];
+      Y[0] += i00;
+      Y[1] += i01;
+      Y[2] += i11;
+      y[0] += i00 * d[0] + i01 * d[1];
+      y[1] += i01 * d[0] + i11 * d[1];
+      ++pairs;
+    }
+    if (pairs < 2) return 0;  // one pair: its motion and the pose's error cannot be told apart
+    // Second pass: each pair against the others' mean (their sums less its own).
+    int n = 0;
+    for (int i = 0; i < assoc.count && i < obs.count; ++i) {  // <= kMaxObservations
+      int j = -1;
+      T d[2], D[3], I[3];
+      if (!motion_pair(obs, pred, assoc, i, j, d, D, I)) continue;
+      const T i00 = I[0], i01 = I[1], i11 = I[2];
+      const T o00 = Y[0] - i00, o01 = Y[1] - i01, o11 = Y[2] - i11;  // the others' information
+      const T odet = o00 * o11 - o01 * o01;
+      if (!(odet > T(0)) || (book_[j].flags & kKnownFlag) != 0) continue;
+      const T c00 = o11 / odet, c01 = -o01 / odet, c11 = o00 / odet;  // their mean's covariance
+      const T w0 = y[0] - (i00 * d[0] + i01 * d[1]), w1 = y[1] - (i01 * d[0] + i11 * d[1]);
+      const T diff[2] = {d[0] - (c00 * w0 + c01 * w1), d[1] - (c01 * w0 + c11 * w1)};
+      const T cov[3] = {D[0] + c00, D[1] + c01, D[2] + c11};
+      const T t = book_[j].motion.add(diff, cov);
+      if (threshold > T(0) && t > threshold) moved[static_cast<std::size_t>(n++)] = static_cast<std::int16_t>(i);
+    }
+    return n;
   }
 }
 
@@ -227,7 +323,7 @@ void Slam<T, B>::reanchor() {
     const Vec2<T> l = Rt * Vec2<T>(x_[la] - px, x_[la + 1] - py);
     x_[la] = l.x();
     x_[la + 1] = l.y();
-    LandmarkRecord<T>& r = book_[a];
+    auto& r = book_[a];
     const Vec2<T> l0 = Rt * Vec2<T>(r.l0[0] - px, r.l0[1] - py);
     r.l0[0] = l0.x();
     r.l0[1] = l0.y();
@@ -237,6 +333,7 @@ void Slam<T, B>::reanchor() {
     r.P0[0] = P0(0, 0);
     r.P0[1] = P0(0, 1);
     r.P0[2] = P0(1, 1);
+    if constexpr (OptionalStages<B>::kWorldModel) r.motion.rotate(c, sn);
     P_.template set_block<3, 2>(0, la, Mat32<T>::Zero());
   }
   x_[0] = x_[1] = x_[2] = T(0);

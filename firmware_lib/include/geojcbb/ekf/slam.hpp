@@ -49,6 +49,7 @@
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/range_bearing.hpp"
+#include "geojcbb/ekf/detection.hpp"
 #include "geojcbb/ekf/landmark_book.hpp"
 #include "geojcbb/ekf/motion.hpp"
 #include "geojcbb/ekf/packed_covariance.hpp"
@@ -162,6 +163,7 @@ class Slam {
     const Status s = check_pose_prior(x0, P0);
     if (s != Status::kOk) return s;
     book_.clear();
+    detect_ready_ = false;
     options_ = options;
     updated_ = false;
     x_[0] = x0.x;
@@ -451,6 +453,34 @@ class Slam {
                                              const LandmarkPolicy& policy, ReviewStats& stats,
                                              std::uint32_t (*clock)() = nullptr, std::uint32_t* counted = nullptr);
 
+  /// The motion test over one scan's pairs, before the update (ekf/motion_test.hpp): with two pairs
+  /// or more, each paired landmark (not a known one) takes its innovation less the others' mean; the
+  /// observations whose landmark's statistic exceeds `threshold` (> 0; 0: only the evidence is kept)
+  /// go to moved[0 .. return), in order. O(kMaxObservations), plus O(kMaxCandidates) for a pair
+  /// without its candidate index.
+  [[gnu::noinline]] int test_motion(const Observations<T, B>& obs, const Prediction<T, B>& pred,
+                                    const Association<T, B>& assoc, T threshold,
+                                    std::array<std::int16_t, B::kMaxObservations>& moved);
+  /// The detection and clutter model the review learns (learn_detection, learn_clutter; reset by
+  /// reset(), kept across restart(): it belongs to the sensor and the world, not to a local map).
+  const DetectionModel<T>& detection() const { return detect_; }
+  /// The motion statistic of landmark j now (0 before its first pairing).
+  T motion_statistic(int j) const {
+    if constexpr (OptionalStages<B>::kWorldModel) {
+      return book_[j].motion.statistic();
+    } else {
+      (void)j;
+      return T(0);
+    }
+  }
+
+ private:
+  /// Pair i's world-frame innovation (world_innovation), its information Sigma^-1 (upper triangle)
+  /// and its landmark's index j. @return false for a pair that is none, or a Sigma not definite.
+  bool motion_pair(const Observations<T, B>& obs, const Prediction<T, B>& pred, const Association<T, B>& assoc, int i,
+                   int& j, T (&delta)[2], T (&Sigma)[3], T (&info)[3]) const;
+
+ public:
   /// Removes the landmark with this id, which the caller knows is not one (a mover): its rows and
   /// columns dropped (marginalised), every other id unchanged.
   /// @return kOk; kInvalidInput when no landmark has this id (then nothing changes).  O(n^2)
@@ -531,10 +561,13 @@ class Slam {
   static constexpr T kStaticFloor_m2 = T(1e-4);  ///< (1 cm)^2: see LandmarkPolicy::static_gate_d2
   std::array<T, kMaxState> x_{};
   Mount<T> mount_{};
-  T prior_[2] = {T(0), T(0)};               ///< the position before the updates since the last predict (FEJ)
-  Covariance P_;                            ///< P, packed
-  LandmarkBook<T, B::kMaxLandmarks> book_;  ///< one record per landmark, in the index order of x and P
-  bool updated_ = false;                    ///< an update since the last predict
+  DetectionModel<T> detect_{};
+  bool detect_ready_ = false;  ///< detect_ holds the policy's priors (the first review since reset)
+  T prior_[2] = {T(0), T(0)};  ///< the position before the updates since the last predict (FEJ)
+  Covariance P_;               ///< P, packed
+  LandmarkBook<T, B::kMaxLandmarks, OptionalStages<B>::kWorldModel>
+      book_;              ///< one record per landmark, in the index order of x and P
+  bool updated_ = false;  ///< an update since the last predict
   FilterOptions options_;
 };
 

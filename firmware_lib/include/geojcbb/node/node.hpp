@@ -292,9 +292,10 @@ class Node {
       proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(i)];
       q.outcome = static_cast<proto::PairingOutcome>(last_.outcome[i]);
       const bool has_id = last_.outcome[i] == Outcome::kPaired || last_.outcome[i] == Outcome::kNewLandmark;
-      q.feature_id = has_id                                    ? last_.feature[i]
-                     : last_.outcome[i] == Outcome::kUnmatched ? proto::kFeatureUnmatched
-                                                               : proto::kFeatureNew;
+      q.feature_id = has_id ? last_.feature[i]
+                     : last_.outcome[i] == Outcome::kUnmatched || last_.outcome[i] == Outcome::kMover
+                         ? proto::kFeatureUnmatched
+                         : proto::kFeatureNew;
       q.d2 = static_cast<float>(last_.d2[i]);
     }
     send(result_);

@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "geojcbb/associate.hpp"
 #include "geojcbb/core/chi_square.hpp"
@@ -31,6 +32,7 @@
 #include "geojcbb/node/stages/loop_check.hpp"
 #include "geojcbb/node/stages/map_seed.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/node/stages/movers.hpp"
 #include "geojcbb/node/stages/relocaliser.hpp"
 #include "geojcbb/node/stages/seeding.hpp"
 #include "geojcbb/node/stages/tentative.hpp"
@@ -65,6 +67,9 @@ class SlamStep {
     if (!OptionalStages<B>::kHandOver && (s.submap_landmarks > 0 || s.submap_distance_m > 0 || s.submap_scans > 0))
       return Status::kInvalidInput;
     if (!OptionalStages<B>::kDuplicateMerge && s.duplicate_merge_d2 > 0) return Status::kInvalidInput;
+    if (!OptionalStages<B>::kWorldModel &&
+        (s.motion_false_alarm > 0 || s.learn_detection || s.learn_clutter || s.detection_floor > 0.0f))
+      return Status::kInvalidInput;
     double gate = 0;
     Status st = chi2_inv(s.new_landmark_level, 2, gate);
     if (st != Status::kOk) return st;
@@ -101,6 +106,7 @@ class SlamStep {
     policy_ = policy;
     policy_.gate_d2 = static_cast<float>(cfg_.gate.individual);  // the area of a landmark's p_FA (> 0)
     ekf::bind_options(s, filter_);
+    motion_t_ = ekf::motion_threshold<T>(s.motion_false_alarm);
     configured_ = true;
     return Status::kOk;
   }
@@ -170,6 +176,9 @@ class SlamStep {
   std::uint32_t movers_caught() const { return tentative_.caught(); }
   /// Movers remembered now (tentative_isolated; at most kMaxMovers).
   int movers() const { return tentative_.movers(); }
+  /// The world model's movers (motion_false_alarm): landmarks that failed the motion test since
+  /// reset(), and the tracks alive now (stages/movers.hpp).
+  const auto& motion_movers() const { return movers_; }
 
   /// A landmark known beforehand (ekf::Slam::add_known_landmark); `surveyed`: see LoopCheck::surveyed.
   [[nodiscard]] Status add_known_landmark(const Vec2<T>& l, const Mat2<T>& Pll, FeatureId& id, bool surveyed = false) {
@@ -279,6 +288,7 @@ class SlamStep {
   void begin_map() {
     reloc_.reset();
     merge_.reset();
+    movers_.reset();
     tentative_.reset();
     window_.reset();
     loop_.new_map();
@@ -397,6 +407,7 @@ class SlamStep {
   [[gnu::noinline]] Status commit(const Observations<T, B>& obs, const MapView<T, B>& map, bool hold,
                                   StepResult<T, B>& out, CounterFn clock) {
     const std::uint32_t t2 = clock ? clock() : 0;
+    const int caught = motion_t_ > T(0) ? movers(obs, map) : 0;
     const bool closing = close_.commit;
     const Mat3<T> before = slam_.pose_covariance();
     Status st = closing ? slam_.inflate_pose(close_.Q) : Status::kOk;
@@ -450,11 +461,43 @@ class SlamStep {
     out.diag = assoc_.diag;
     out.review = rs;
     out.review.evicted = evicted;
+    out.review.movers = caught;
     out.counts = StageCounts{};
     out.counts.update = t3 - t2;
     out.counts.augment_review = t4 - t3;
     out.counts.existence = existence;
     return Status::kOk;
+  }
+
+  /// The world model's motion (stages/movers.hpp), before the update: the movers' tracks take the
+  /// observations in their gates; each remaining pair's landmark takes the motion test, and one that
+  /// fails leaves the map (marginalised) while its observation begins a track. The update and the
+  /// review then see neither. @return the landmarks that became movers.
+  [[gnu::noinline]] int movers(const Observations<T, B>& obs, const MapView<T, B>& map) {
+    if constexpr (!OptionalStages<B>::kWorldModel) {  // compiled out: configure() refused the option
+      (void)obs;
+      (void)map;
+      return 0;
+    } else {
+      movers_.take(obs, map, cfg_.gate.individual, assoc_);
+      std::array<std::int16_t, B::kMaxObservations> moved;
+      int n = slam_.test_motion(obs, pred_, assoc_, motion_t_, moved);
+      // The static gate's movers too (static_gate_level): before the update, so they become tracks.
+      for (int i = 0; i < obs.count && policy_.static_gate_d2 > 0.0f; ++i) {  // <= kMaxObservations
+        const int j = slam_.index_of(assoc_.feature[i]);
+        bool listed = false;
+        for (int k = 0; k < n; ++k) listed = listed || moved[static_cast<std::size_t>(k)] == i;  // <= kMaxObservations
+        if (j >= 0 && !listed && map.moved(j)) moved[static_cast<std::size_t>(n++)] = static_cast<std::int16_t>(i);
+      }
+      int caught = 0;
+      for (int k = 0; k < n; ++k) {  // <= kMaxObservations
+        const int i = moved[static_cast<std::size_t>(k)];
+        const FeatureId id = assoc_.feature[i];
+        movers_.start(obs, map, i, assoc_);
+        caught += slam_.forget(id) == Status::kOk;
+      }
+      return caught;
+    }
   }
 
   ekf::Slam<T, B> slam_;
@@ -477,6 +520,9 @@ class SlamStep {
   ClustersFirst<T, B> clusters_;
   Tentative<T, B> tentative_;
   DuplicateMerge<T, B> merge_;
+  /// The movers' tracks, or a stand-in without the world model (OptionalStages::kWorldModel).
+  std::conditional_t<OptionalStages<B>::kWorldModel, Movers<T, B>, NoMovers> movers_;
+  T motion_t_ = T(0);  ///< the motion test's threshold (0: off)
   // Scratch of one scan, shared by the stages in turn (one buffer in RAM).
   AlignScratch<T, B> scratch_;
   Seeds<T, B> seeds_;

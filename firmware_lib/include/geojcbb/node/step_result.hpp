@@ -22,6 +22,7 @@ enum class Outcome : std::uint8_t {
   kNewDropped,    ///< no compatible candidate, but inside the augmentation gate (or augmentation off): dropped
   kUnmatched,     ///< compatible candidates, left unpaired by the search (ambiguous)
   kNotAugmented,  ///< would have become a landmark, but the map is full
+  kMover,         ///< taken by a mover's track (stages/movers.hpp): neither paired nor mapped
 };
 
 /// Instruction or cycle counts of the stages, from the clock the caller supplies (0 without): one

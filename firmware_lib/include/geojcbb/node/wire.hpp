@@ -38,7 +38,8 @@ constexpr bool same_outcomes() {
          static_cast<int>(Outcome::kNewDropped) == static_cast<int>(P::kNewDropped) &&
          static_cast<int>(Outcome::kUnmatched) == static_cast<int>(P::kUnmatched) &&
          static_cast<int>(Outcome::kNotAugmented) == static_cast<int>(P::kNotAugmented) &&
-         static_cast<int>(Outcome::kNotAugmented) == static_cast<int>(proto::kMaxPairingOutcome);
+         static_cast<int>(Outcome::kMover) == static_cast<int>(P::kMover) &&
+         static_cast<int>(Outcome::kMover) == static_cast<int>(proto::kMaxPairingOutcome);
 }
 }  // namespace wire_agreement
 static_assert(wire_agreement::same_strategies(), "geojcbb::Strategy and CONFIG's strategy code, value for value");

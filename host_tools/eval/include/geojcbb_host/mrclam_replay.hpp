@@ -80,6 +80,9 @@ class MrclamSource : public RecordedSource {
  public:
   MrclamSource(const mrclam::Dataset& ds, const mrclam::RobotLog& log, const MrclamModel& model,
                bool drop_other_robots = false);
+  /// Per scan input, in input order: the subject of each of its observations (Measurement::subject;
+  /// the truth says only "clutter" for another robot, the mover split needs which one).
+  std::vector<std::vector<int>> scan_subjects;
 };
 
 /// One robot's replay. Throws std::runtime_error as run_slam does.

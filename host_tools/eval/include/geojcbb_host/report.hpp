@@ -50,7 +50,8 @@ struct RunAggregate {
 
 /// The CSV columns a run can give (run_csv): scans, observations, tp, tn, fp, fn, precision,
 /// recall, f1, association_s, run_s, mean_abs_x_m, mean_abs_y_m, landmarks, spurious_in_map,
-/// budget_hits, relocalised_at_scan, anees, duplicates, fp_clutter, group_f1.
+/// budget_hits, relocalised_at_scan, anees, duplicates, fp_clutter, group_f1, ambiguous_scans,
+/// fp_mover, movers_in_map.
 const std::vector<std::string>& run_csv_columns();
 /// A run's fields for `columns` (names from run_csv_columns), comma separated, numbers as an
 /// ostream writes them. kidnap_t_s <= 0: relocalised_at_scan is -1. Throws on an unknown column.

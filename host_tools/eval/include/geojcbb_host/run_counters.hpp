@@ -9,6 +9,8 @@
 // clang-format off
 #define GEOJCBB_RUN_COUNTERS(X) \
   X(fp_clutter, "false_pairs_to_clutter", "of the FP, clutter (other robots, false detections) paired") \
+  X(fp_mover, "false_pairs_to_mover", "of the FP of clutter, a simulated mover's observation paired with any map landmark") \
+  X(movers_in_map, "movers_in_map", "landmarks made from a simulated mover's observation, still mapped at the end") \
   X(fp_to_duplicate, "false_pairs_to_duplicate", "a landmark's FP with a map landmark made after the first of its identity") \
   X(fp_to_original, "false_pairs_to_original", "a landmark's FP with the first map landmark of another identity") \
   X(fp_in_group, "false_pairs_in_group", "a landmark's FP with another landmark of its group (MRCLAM: a row of tubes)") \

@@ -156,10 +156,13 @@ class RunScorer {
   /// @param landmark_group  true landmark -> group (empty: each landmark its own group)
   RunScorer(std::size_t true_landmarks, std::vector<int> landmark_group);
   /// One scan, before the filter's update. truth[i]: the observation's true landmark (index, or -1
-  /// for clutter); paired[i]: the landmark id it was paired with, or < 0 when not paired.
-  void score(const std::vector<int>& truth, const std::vector<FeatureId>& paired);
-  /// Landmark `id` was made from an observation of true landmark `truth` (-1: clutter).
-  void added(FeatureId id, int truth);
+  /// for clutter and movers); paired[i]: the landmark id it was paired with, or < 0 when not paired;
+  /// mover[i] (empty: none): the simulated mover it saw (its truth -1: a pair is false, counted in
+  /// fp_clutter and fp_mover), or -1.
+  void score(const std::vector<int>& truth, const std::vector<FeatureId>& paired, const std::vector<int>& mover = {});
+  /// Landmark `id` was made from an observation of true landmark `truth` (-1: clutter or a mover);
+  /// mover >= 0: of that simulated mover (counted in movers_in_map while it stays mapped).
+  void added(FeatureId id, int truth, int mover = -1);
   /// Landmark `id` left the map (tentative, missed in view).
   void removed(FeatureId id);
   /// Landmark `id` left the local map with it, handed over (RunOptions::submaps): no longer mapped
@@ -174,12 +177,15 @@ class RunScorer {
   /// The scan just recorded by pose(): its pairings and the sum of their NIS.
   void nis(int paired, double nis_sum);
   RunResult& result() { return res_; }
-  /// The result with mean_abs_x_m / mean_abs_y_m divided by the scans with a true pose.
+  /// The result with mean_abs_x_m / mean_abs_y_m divided by the scans with a true pose, and
+  /// movers_in_map counted (the landmarks made from a mover still mapped here; handed-over ones are
+  /// not, so with joined local maps it counts the last map's only).
   RunResult finish() const;
 
  private:
   int cls(int t) const { return landmark_group_.empty() ? t : landmark_group_[static_cast<std::size_t>(t)]; }
   std::vector<int> feature_truth_;   ///< landmark id -> true landmark it came from (-1 clutter)
+  std::vector<int> feature_mover_;   ///< landmark id -> the mover it came from, or -1
   std::vector<int> mapped_;          ///< true landmark -> map landmarks made from it, still mapped
   std::vector<FeatureId> first_;     ///< true landmark -> the first map landmark made from it (-1: none)
   std::vector<int> landmark_group_;  ///< true landmark -> its group

@@ -21,6 +21,17 @@
 
 namespace geojcbb::host {
 
+/// What one scan's observations became, for an observer of the run (RunOptions::on_scan): the
+/// observations in the order the filter took them (the nearest first, at most kEvalMaxObservations),
+/// and per observation the landmark id it was paired with (`paired`) or that was made from it
+/// (`added`), kNewFeature where neither.
+struct ScanOutcome {
+  double t_s = 0;
+  const std::vector<SimObservation>* scan = nullptr;
+  const std::vector<FeatureId>* paired = nullptr;
+  const std::vector<FeatureId>* added = nullptr;
+};
+
 /// A run's settings: the SLAM step's (one StepSettings, every option of core/options.h) and what only
 /// the host knows. step_settings() applies the host's fields to the step's: the in-process filter and
 /// a device over the link are configured from its result, so both run the same settings.
@@ -55,6 +66,9 @@ struct RunOptions {
   bool submap_seed = false;
   JoinOptions join;
   std::string join_preset = "PCJCBB";  ///< join.preset's name (the command line's), read by step_settings
+  /// Called after each scan's step with what its observations became (the MRCLAM report's split of
+  /// the other robots' false pairs, mover_motion.hpp). In process only: a device's runner ignores it.
+  std::function<void(const ScanOutcome&)> on_scan;
 };
 
 /// The closing rule of --submaps when none is given: the default device's map (96 landmarks) less

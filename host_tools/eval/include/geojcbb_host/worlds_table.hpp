@@ -34,4 +34,19 @@ std::vector<FamilyRow> non_inferiority(const std::vector<WorldOutcome>& worlds);
 /// The table as markdown, with the definitions above it and the worse worlds' files below it.
 std::string non_inferiority_markdown(const std::vector<WorldOutcome>& worlds);
 
+/// One generated world's result for one strategy (every strategy, beside the robust preset's table).
+struct WorldStrategyOutcome {
+  std::string family, strategy;
+  double err = 0;                    ///< pose error [m], the mean over the world's runs
+  double f1 = 0;                     ///< over the world's runs' pairs
+  int tp = 0, fp = 0, fn = 0;        ///< sums over the world's runs
+  int fp_clutter = 0, fp_mover = 0;  ///< of the FP: clutter paired; of those, a mover's observation
+  int movers_in_map = 0;             ///< landmarks made from movers still mapped at the end
+};
+
+/// Per family and strategy (both in first-seen order), then per strategy over every family: worlds,
+/// median and pooled F1, median pose error, and the sums of FP, FP of clutter, FP of movers and
+/// movers in the map, as markdown.
+std::string strategies_markdown(const std::vector<WorldStrategyOutcome>& worlds);
+
 }  // namespace geojcbb::host

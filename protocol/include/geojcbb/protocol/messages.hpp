@@ -203,10 +203,14 @@ struct Config : Codec<Config> {
   float consistency_wide_d2 = 23.025850929940457f;  ///< > 0
   float consistency_pair_d2 = 10.827566170662733f;  ///< > 0
   bool rjc = false;
-  std::uint8_t rjc_tries = 8;      ///< 1 .. 64
-  std::uint8_t rjc_subset = 8;     ///< >= 1
-  float occlusion_rad = 0.0f;      ///< [0, pi]
-  float static_gate_level = 0.0f;  ///< [0, 1)
+  std::uint8_t rjc_tries = 8;       ///< 1 .. 64
+  std::uint8_t rjc_subset = 8;      ///< >= 1
+  float occlusion_rad = 0.0f;       ///< [0, pi]
+  float static_gate_level = 0.0f;   ///< [0, 1)
+  float motion_false_alarm = 0.0f;  ///< [0, 1) (0: off)
+  float detection_floor = 0.0f;     ///< [0, 1]
+  bool learn_detection = false;
+  bool learn_clutter = false;
   bool first_estimates_jacobians = true;
   bool augment = true;
   bool relocalise = false;                   ///< the pose-free relocaliser
@@ -285,6 +289,12 @@ struct Config : Codec<Config> {
         field("rjc_subset", &Config::rjc_subset, range::at_least(1), "", "the device checks ≤ its `max_observations`"),
         field("occlusion_rad", &Config::occlusion_rad, range::interval(0.0f, kPiF, false, false), "rad", "0: off"),
         field("static_gate_level", &Config::static_gate_level, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
+        field("motion_false_alarm", &Config::motion_false_alarm, range::interval(0.0f, 1.0f, false, true), "",
+              "per pairing; 0: off"),
+        field("detection_floor", &Config::detection_floor, range::interval(0.0f, 1.0f, false, false), "",
+              "0: every miss counts"),
+        field("learn_detection", &Config::learn_detection, range::one_of(0, 1), ""),
+        field("learn_clutter", &Config::learn_clutter, range::one_of(0, 1), ""),
         field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
               "applied at the next RESET"),
         field("augment", &Config::augment, range::one_of(0, 1), "", "0: a fixed map, nothing added"),
@@ -528,8 +538,9 @@ enum class PairingOutcome : std::uint8_t {
   kNewDropped,    ///< no compatible candidate, inside the augmentation gate: dropped (kFeatureNew)
   kUnmatched,     ///< ambiguous, left unpaired (kFeatureUnmatched)
   kNotAugmented,  ///< would have become a landmark, map full (kFeatureNew)
+  kMover,         ///< taken by a mover's track: neither paired nor mapped (kFeatureUnmatched)
 };
-constexpr std::uint8_t kMaxPairingOutcome = 4;
+constexpr std::uint8_t kMaxPairingOutcome = 5;
 
 struct PairingWire {
   static constexpr const char* kRule = "feature_id>=0_iff_outcome_paired_or_new_landmark";
@@ -542,7 +553,7 @@ struct PairingWire {
     return std::make_tuple(
         field("outcome", &PairingWire::outcome, range::between(0, kMaxPairingOutcome), "",
               "0 paired, 1 new landmark, 2 new but dropped (inside the augmentation gate), 3 unmatched "
-              "(ambiguous), 4 not augmented (map full)"),
+              "(ambiguous), 4 not augmented (map full), 5 a mover's (taken by a mover track)"),
         field("feature_id", &PairingWire::feature_id, range::at_least(kFeatureUnmatched), "",
               "outcomes 0 and 1: ≥ 0, the landmark paired with / created (ids are stable); otherwise −1 NEW "
               "(`kFeatureNew`) or −2 UNMATCHED (`kFeatureUnmatched`)"),
@@ -977,7 +988,7 @@ constexpr bool all_match_schema(MessageList<M...>) {
 }  // namespace detail
 static_assert(detail::all_match_schema(AllMessages<>{}));
 static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
-static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 160 &&
+static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 170 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   OdomDelta::kPayloadSize == 36 && Pose::kFixedSize == 47 && Pose::kItemSize == 4 &&
                   Stats::kPayloadSize == 96 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&

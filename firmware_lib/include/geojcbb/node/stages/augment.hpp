@@ -13,6 +13,7 @@
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/ekf/slam.hpp"
+#include "geojcbb/node/stages/movers.hpp"
 #include "geojcbb/node/step_result.hpp"
 
 namespace geojcbb::node {
@@ -35,6 +36,8 @@ template <typename T, class B>
       out.outcome[i] = Outcome::kPaired;
     } else if (f == kUnmatched) {
       out.outcome[i] = Outcome::kUnmatched;
+    } else if (f == kMoverFeature) {
+      out.outcome[i] = Outcome::kMover;
     } else if (!cfg.augment || !(assoc.d2[i] > gate)) {
       out.outcome[i] = Outcome::kNewDropped;
     } else {
