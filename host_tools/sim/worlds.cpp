@@ -156,7 +156,7 @@ Scenario::Mover person(Draw& d, bool crosser, const std::vector<Eigen::Vector2d>
   w.half = half;
   const int edge = d.i(0, static_cast<int>(path.size()) - 1);
   w.a = path[static_cast<std::size_t>(edge)];
-  const Eigen::Vector2d b = path[(static_cast<std::size_t>(edge) + 1) % path.size()];
+  const Eigen::Vector2d& b = path[(static_cast<std::size_t>(edge) + 1) % path.size()];
   w.len = (b - w.a).norm();
   w.along = (b - w.a) / w.len;
   w.across = Eigen::Vector2d(-w.along.y(), w.along.x());

@@ -173,7 +173,7 @@ class Movers {
   static Vec2<T> world_point(const Observations<T, B>& obs, const MapView<T, B>& map, int i, Mat2<T>& Rw) {
     Mat23<T> Jx;
     Mat2<T> Jz;
-    const Vec2<T> p = inverse_observe(map.pose(), map.mount(), obs.z[i], &Jx, &Jz);
+    Vec2<T> p = inverse_observe(map.pose(), map.mount(), obs.z[i], &Jx, &Jz);
     Rw = symmetric_part(Mat2<T>(Jz * obs.R[i] * Jz.transpose() + Jx * map.pose_covariance() * Jx.transpose()));
     return p;
   }
