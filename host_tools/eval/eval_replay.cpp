@@ -20,6 +20,7 @@
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/gps.hpp"
+#include "geojcbb_host/world_model_report.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/report.hpp"
 #include "geojcbb_host/run_cli.hpp"
@@ -50,20 +51,27 @@ struct ReplayOptions {
   RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
 };
 
+// A landmark ever observed within this range [m] (made or paired): on Victoria Park, where a
+// smoother's graph (iSAM/GTSAM's 151 trees) keeps only measurements at 4.6-20.7 m, the landmarks of
+// the map that graph could hold.
+constexpr double kNearRange_m = 20;
+
 // The GPS table of a replay whose log has gps lines: per strategy the error of the estimated antenna
-// track at the screened fixes, the landmarks mapped, the mean NIS per pairing against its 95 %
-// bounds, and the replay's time.
+// track at the screened fixes, the landmarks mapped (and of them those ever observed within
+// kNearRange_m), the mean NIS per pairing against its 95 % bounds, and the replay's time.
 nlohmann::json gps_table(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg,
                          const std::vector<GpsScore>& gps) {
   nlohmann::json rows = nlohmann::json::array();
   std::printf("\nGPS (the antenna's estimated track at each kept fix; %d fixes, %d rejected after a gap, %d jumps)\n",
               gps.empty() ? 0 : gps[0].fixes, gps.empty() ? 0 : gps[0].after_gap, gps.empty() ? 0 : gps[0].jumps);
   std::printf(
-      "| strategy | fixes used | RMSE [m] | max [m] (at t s) | landmarks | pairings | mean NIS [95 %% bounds] | time [s] |\n");
-  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+      "| strategy | fixes used | RMSE [m] | max [m] (at t s) | landmarks | within %.0f m | pairings | mean NIS [95 %% "
+      "bounds] | time [s] |\n",
+      kNearRange_m);
+  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (std::size_t k = 0; k < strategies.size(); ++k) {
     if (!agg[k].have_first) {
-      std::printf("| %s | failed: %s | | | | | | |\n", strategies[k].name().c_str(), agg[k].error.c_str());
+      std::printf("| %s | failed: %s | | | | | | | |\n", strategies[k].name().c_str(), agg[k].error.c_str());
       rows.push_back({{"strategy", strategies[k].name()}, {"error", agg[k].error}});
       continue;
     }
@@ -71,9 +79,11 @@ nlohmann::json gps_table(const std::vector<Method>& strategies, const std::vecto
     const GpsScore& g = gps[k];
     const double n = static_cast<double>(r.nis_pairings);
     const double nis = n > 0 ? r.nis_sum / n : NAN, half = n > 0 ? 1.96 * 2 / std::sqrt(n) : NAN;  // mean of chi2(2)
-    std::printf("| %s | %d | %.2f | %.2f (%.0f) | %d | %ld | %.2f [%.2f, %.2f] | %.2f |\n",
-                strategies[k].name().c_str(), g.used, g.rmse_m, g.max_m, g.max_at_s, r.landmarks, r.nis_pairings, nis,
-                2 - half, 2 + half, agg[k].run_s);
+    const auto near =
+        std::count_if(r.map.begin(), r.map.end(), [](const MapLandmark& l) { return l.closest_m <= kNearRange_m; });
+    std::printf("| %s | %d | %.2f | %.2f (%.0f) | %d | %ld | %ld | %.2f [%.2f, %.2f] | %.2f |\n",
+                strategies[k].name().c_str(), g.used, g.rmse_m, g.max_m, g.max_at_s, r.landmarks,
+                static_cast<long>(near), r.nis_pairings, nis, 2 - half, 2 + half, agg[k].run_s);
     rows.push_back({{"strategy", strategies[k].name()},
                     {"fixes_used", g.used},
                     {"fixes_unmatched", g.unmatched},
@@ -81,6 +91,7 @@ nlohmann::json gps_table(const std::vector<Method>& strategies, const std::vecto
                     {"max_m", g.max_m},
                     {"max_at_s", g.max_at_s},
                     {"landmarks", r.landmarks},
+                    {"landmarks_within_20_m", near},
                     {"not_augmented", r.not_augmented},
                     {"pairings", r.nis_pairings},
                     {"mean_nis", nis},
@@ -276,6 +287,7 @@ int run_replay(const ReplayOptions& o) {
   if (with_truth == 0) std::printf("no truth lines at the scans: no pose error or NEES\n");
 
   std::vector<RunAggregate> agg(strategies.size());
+  std::vector<WorldModelSums> world(strategies.size());
   const double wall_s =
       run_parallel(strategies.size(), o.runner ? 1 : o.flags.jobs, o.flags.progress, [&](std::size_t k) {
         RunOptions ro = base;
@@ -286,6 +298,7 @@ int run_replay(const ReplayOptions& o) {
         try {
           RunResult r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
           agg[k].add(r, std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+          world[k].add(r);
           agg[k].first = std::move(r);
           agg[k].have_first = true;
         } catch (const std::exception& e) {
@@ -303,6 +316,15 @@ int run_replay(const ReplayOptions& o) {
   }
   print_tables(rows, stdout, labelled);
   print_submaps(strategies, agg, stdout);
+  {
+    std::vector<std::string> names;
+    for (const Method& m : strategies) names.push_back(m.name());
+    DetectionTable table;
+    replay::LogSource src = source;
+    if (labelled && with_truth > 0 && !positions.empty())
+      table = labelled_detection(src, positions, step_settings(base, src.sensor));
+    print_world_model(names, world, table.expected.empty() ? nullptr : &table, stdout);
+  }
   std::vector<GpsScore> gps(strategies.size());
   nlohmann::json gps_rows;
   if (!log.gps.empty()) {

@@ -17,6 +17,7 @@
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/event_log.hpp"
 #include "geojcbb_host/mover_motion.hpp"
+#include "geojcbb_host/world_model_report.hpp"
 #include "geojcbb_host/report.hpp"
 
 namespace geojcbb::host {
@@ -388,7 +389,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     std::size_t d, r, s;
     Pose2<double> x0{};  ///< the start (the ground truth's): the robot's own frame for --merge
     RunResult res;
-    MoverCounts movers;  ///< in process only (a device's runner does not report its steps' outcomes)
+    MoverCounts movers;       ///< in process only (a device's runner does not report its steps' outcomes)
+    DetectionTable labelled;  ///< p_D from the labels (the first strategy's job of each robot)
     double run_s = 0;
     std::string error;
   };
@@ -396,7 +398,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
   for (std::size_t d = 0; d < data.size(); ++d)
     for (std::size_t r = 0; r < data[d].logs.size(); ++r)
       for (std::size_t s = 0; s < o.strategies.size(); ++s)
-        jobs.push_back({d, r, s, Pose2<double>{}, RunResult{}, MoverCounts{}, 0, std::string{}});
+        jobs.push_back({d, r, s, Pose2<double>{}, RunResult{}, MoverCounts{}, DetectionTable{}, 0, std::string{}});
   const int threads = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const double wall_s = run_parallel(jobs.size(), threads, progress, [&](std::size_t j) {
     Job& jb = jobs[j];
@@ -420,6 +422,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
       ro.landmark_group = replay::landmark_groups(positions, kLandmarkGroupRadius_m);
       if (o.known_map) ro.known_map = positions;
       replay::LogSource src(log, replay::LogNoise{});
+      if (jb.s == 0) jb.labelled = labelled_detection(src, positions, step_settings(ro, src.sensor));
       jb.x0 = src.x0;
       jb.res = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
       jb.movers = movers.counts();
@@ -452,6 +455,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     std::printf("   winner\n");
     std::vector<RunAggregate> agg(o.strategies.size());
     std::vector<MoverCounts> movers(o.strategies.size());
+    std::vector<WorldModelSums> world(o.strategies.size());
+    DetectionTable labelled;
     for (std::size_t r = 0; r < dd.logs.size(); ++r) {
       std::printf("  %-6d", dd.logs[r].robot);
       double best = -1;
@@ -485,6 +490,8 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
         }
         agg[s].add(res, jb.run_s);
         movers[s] += jb.movers;
+        world[s].add(res);
+        labelled += jb.labelled;
         csv << line << run_csv(res, jb.run_s, kMrclamCsvColumns);
         for (int k : jb.movers.bucket) {  // empty through a device: it does not report the outcomes
           csv << ',';
@@ -508,6 +515,9 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     print_summary(rows, group_rows, stdout);
     print_submaps(o.strategies, agg, stdout);
     if (!o.runner) print_movers(o.strategies, movers, rows);
+    std::vector<std::string> names;
+    for (const Method& m : o.strategies) names.push_back(m.name());
+    print_world_model(names, world, &labelled, stdout);
     std::printf(
         "Table 2 at landmark-group level (a pair is correct when its "
         "feature's landmark is in the observed "

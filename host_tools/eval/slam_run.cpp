@@ -36,6 +36,12 @@ struct SlamSession::State {
   std::vector<int> mover;         // scratch: the scan's movers (-1: none)
   std::vector<FeatureId> paired;  // scratch: the scan's pairings
   std::vector<FeatureId> added;   // scratch: the landmarks the scan's observations made
+  std::vector<double> closest_m;  // landmark id -> the nearest range it was observed at
+  void observed(FeatureId id, double range_m) {
+    const auto k = static_cast<std::size_t>(id);
+    if (k >= closest_m.size()) closest_m.resize(k + 1, std::numeric_limits<double>::infinity());
+    closest_m[k] = std::min(closest_m[k], range_m);
+  }
   // Sequential map joining (RunOptions::submaps).
   std::unique_ptr<GlobalMap> global;
   std::vector<int> id_truth;  // landmark id -> its truth, kept when its local map is handed over
@@ -356,7 +362,12 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
     s.added[i] = s.result.feature[i];
   }
   if (s.opt.on_scan) s.opt.on_scan(ScanOutcome{t_s, &scan, &s.paired, &s.added});
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const FeatureId id = s.paired[i] >= 0 ? s.paired[i] : s.added[i];
+    if (id >= 0) s.observed(id, scan[i].z.x());
+  }
   res.merges += s.result.review.merged;
+  res.movers_caught += s.result.review.movers;
   res.evicted += s.result.review.evicted;
   const Prediction<double, EB>& pred = s.step.prediction();
   for (std::size_t i = 0; i < scan.size(); ++i) {
@@ -421,9 +432,17 @@ RunResult SlamSession::finish() {
   res.landmarks = slam.landmarks();
   for (int j = 0; j < res.landmarks; ++j) {
     const int t = s.scorer->truth_of(slam.id(j));
-    res.map.push_back({slam.landmark(j).x(), slam.landmark(j).y(), t});
+    const auto id = static_cast<std::size_t>(slam.id(j));
+    const double closest = id < s.closest_m.size() ? s.closest_m[id] : std::numeric_limits<double>::infinity();
+    res.map.push_back({slam.landmark(j).x(), slam.landmark(j).y(), t, closest});
     res.spurious_in_map += t < 0;
   }
+  const ekf::DetectionModel<double>& dm = slam.detection();
+  if (s.opt.step.learn_detection) {
+    for (int b = 0; b < ekf::DetectionModel<double>::kDetectionBins; ++b) res.learned_pd.push_back(dm.pd_bin(b));
+    res.pd_bin_m = dm.bin_m();
+  }
+  if (s.opt.step.learn_clutter) res.clutter_density = dm.density();
   const int n = 2 * res.landmarks;
   res.map_cov.resize(n, n);
   for (int r = 0; r < n; ++r)

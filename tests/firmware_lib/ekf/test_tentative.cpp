@@ -96,7 +96,7 @@ TEST_CASE_TEMPLATE("tentative: a mover never moves the pose, is caught, and is n
     if (caught_at >= 0) {
       CHECK(with->out.outcome[last] == node::Outcome::kUnmatched);  // the mover again: no pair, no landmark
       CHECK(with->step.slam().landmarks() == mapped);
-    } else if (with->step.movers_caught() > 0) {
+    } else if (with->step.tentative().caught() > 0) {
       caught_at = k;
     } else if (k > 0) {
       CHECK(with->out.outcome[last] == node::Outcome::kPaired);  // with its own tentative landmark
@@ -111,8 +111,8 @@ TEST_CASE_TEMPLATE("tentative: a mover never moves the pose, is caught, and is n
   MESSAGE("mover caught after ", caught_at, " scans (", 0.06 * caught_at, " m moved)");
   CHECK(caught_at > 0);
   CHECK(caught_at < 20);
-  CHECK(with->step.movers_caught() == 1);
-  CHECK(with->step.movers() == 1);
+  CHECK(with->step.tentative().caught() == 1);
+  CHECK(with->step.tentative().movers() == 1);
 }
 
 TEST_CASE_TEMPLATE("tentative: a static new landmark is paired while tentative, then confirmed", T, float, double) {
@@ -147,7 +147,7 @@ TEST_CASE_TEMPLATE("tentative: a static new landmark is paired while tentative, 
   MESSAGE("static new landmark confirmed after ", confirmed_at, " reviews");
   CHECK(confirmed_at >= 10);
   CHECK(confirmed_at <= 20);
-  CHECK(with->step.movers_caught() == 0);
+  CHECK(with->step.tentative().caught() == 0);
   const int j = with->step.slam().index_of(id);
   REQUIRE(j >= 0);
   CHECK((with->step.slam().landmark(j) - post.cast<T>()).norm() < T(0.01));

@@ -53,10 +53,7 @@ template <typename T>
 void observe_with(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x, const Eigen::Vector2d& p,
                   Observations<T, B>& obs) {
   observe_from(map, x, obs);
-  const double dx = p.x() - x.x, dy = p.y() - x.y;
-  Mat2<T> R;
-  R << T(0.01), T(0), T(0), T(3e-4);
-  REQUIRE(obs.push(Vec2<T>(T(std::hypot(dx, dy)), T(wrap_angle(std::atan2(dy, dx) - x.theta))), R) == Status::kOk);
+  test::observe_point(x, p, obs, true);
 }
 
 }  // namespace

@@ -30,19 +30,23 @@ inline std::vector<Eigen::Vector2d> reloc_map() {
   return map;
 }
 
-/// The landmarks within 20 m ahead of `x` (1.5 rad either side) as observations (noise-free; R for
-/// 0.1 m and 1 degree).
+/// The point p seen from x, appended to obs (noise-free; R for 0.1 m and 1 degree) when it is within
+/// 20 m ahead of x (1.5 rad either side) and obs has room, or always with `anywhere`.
+template <typename T, class B>
+void observe_point(const Pose2<double>& x, const Eigen::Vector2d& p, Observations<T, B>& obs, bool anywhere = false) {
+  Mat2<T> R;
+  R << T(0.01), T(0), T(0), T(3e-4);
+  const double dx = p.x() - x.x, dy = p.y() - x.y;
+  const double r = std::hypot(dx, dy), b = wrap_angle(std::atan2(dy, dx) - x.theta);
+  if (!anywhere && (r > 20 || std::abs(b) > 1.5 || obs.count >= B::kMaxObservations)) return;
+  REQUIRE(obs.push(Vec2<T>(T(r), T(b)), R) == Status::kOk);
+}
+
+/// The landmarks within 20 m ahead of `x` (1.5 rad either side) as observations (observe_point).
 template <typename T, class B>
 void observe_from(const std::vector<Eigen::Vector2d>& map, const Pose2<double>& x, Observations<T, B>& obs) {
   obs.clear();
-  Mat2<T> R;
-  R << T(0.01), T(0), T(0), T(3e-4);
-  for (const auto& l : map) {
-    const double dx = l.x() - x.x, dy = l.y() - x.y;
-    const double r = std::hypot(dx, dy), b = wrap_angle(std::atan2(dy, dx) - x.theta);
-    if (r > 20 || std::abs(b) > 1.5 || obs.count >= B::kMaxObservations) continue;
-    REQUIRE(obs.push(Vec2<T>(T(r), T(b)), R) == Status::kOk);
-  }
+  for (const auto& l : map) observe_point(x, l, obs);
 }
 
 /// A SLAM step, its scan and its result (heap-held by the tests: the step is large).

@@ -55,6 +55,8 @@ class DetectionModel {
     const std::size_t k = static_cast<std::size_t>(b);
     return (kPriorSightings * pd0_ + hits_[k]) / (kPriorSightings + expected_[k]);
   }
+  /// A bin's width [m].
+  T bin_m() const { return bin_m_; }
   /// Sightings expected in bin b (faded), for the host's table.
   T expected_bin(int b) const { return expected_[static_cast<std::size_t>(b)]; }
   /// The clutter density [1/m^2].

@@ -226,12 +226,13 @@ bool Slam<T, B>::motion_pair(const Observations<T, B>& obs, const Prediction<T, 
 
 template <typename T, class B>
 int Slam<T, B>::test_motion(const Observations<T, B>& obs, const Prediction<T, B>& pred, const Association<T, B>& assoc,
-                            T threshold, std::array<std::int16_t, B::kMaxObservations>& moved) {
+                            T threshold, T static_gate_d2, std::array<std::int16_t, B::kMaxObservations>& moved) {
   if constexpr (!OptionalStages<B>::kWorldModel) {  // compiled out: configure() refused the option
     (void)obs;
     (void)pred;
     (void)assoc;
     (void)threshold;
+    (void)static_gate_d2;
     (void)moved;
     return 0;
   } else {
@@ -250,7 +251,8 @@ int Slam<T, B>::test_motion(const Observations<T, B>& obs, const Prediction<T, B
       y[1] += i01 * d[0] + i11 * d[1];
       ++pairs;
     }
-    if (pairs < 2) return 0;  // one pair: its motion and the pose's error cannot be told apart
+    // One pair: its motion and the pose's error cannot be told apart (only the static gate decides).
+    const bool evidence = pairs >= 2;
     // Second pass: each pair against the others' mean (their sums less its own).
     int n = 0;
     for (int i = 0; i < assoc.count && i < obs.count; ++i) {  // <= kMaxObservations
@@ -260,13 +262,16 @@ int Slam<T, B>::test_motion(const Observations<T, B>& obs, const Prediction<T, B
       const T i00 = I[0], i01 = I[1], i11 = I[2];
       const T o00 = Y[0] - i00, o01 = Y[1] - i01, o11 = Y[2] - i11;  // the others' information
       const T odet = o00 * o11 - o01 * o01;
-      if (!(odet > T(0)) || (book_[j].flags & kKnownFlag) != 0) continue;
-      const T c00 = o11 / odet, c01 = -o01 / odet, c11 = o00 / odet;  // their mean's covariance
-      const T w0 = y[0] - (i00 * d[0] + i01 * d[1]), w1 = y[1] - (i01 * d[0] + i11 * d[1]);
-      const T diff[2] = {d[0] - (c00 * w0 + c01 * w1), d[1] - (c01 * w0 + c11 * w1)};
-      const T cov[3] = {D[0] + c00, D[1] + c01, D[2] + c11};
-      const T t = book_[j].motion.add(diff, cov);
-      if (threshold > T(0) && t > threshold) moved[static_cast<std::size_t>(n++)] = static_cast<std::int16_t>(i);
+      bool fails = has_moved(j, static_gate_d2);
+      if (evidence && odet > T(0) && (book_[j].flags & kKnownFlag) == 0) {
+        const T c00 = o11 / odet, c01 = -o01 / odet, c11 = o00 / odet;  // their mean's covariance
+        const T w0 = y[0] - (i00 * d[0] + i01 * d[1]), w1 = y[1] - (i01 * d[0] + i11 * d[1]);
+        const T diff[2] = {d[0] - (c00 * w0 + c01 * w1), d[1] - (c01 * w0 + c11 * w1)};
+        const T cov[3] = {D[0] + c00, D[1] + c01, D[2] + c11};
+        const T t = book_[j].motion.add(diff, cov);
+        fails = fails || (threshold > T(0) && t > threshold);
+      }
+      if (fails) moved[static_cast<std::size_t>(n++)] = static_cast<std::int16_t>(i);
     }
     return n;
   }

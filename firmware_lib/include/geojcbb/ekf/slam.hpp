@@ -455,11 +455,12 @@ class Slam {
 
   /// The motion test over one scan's pairs, before the update (ekf/motion_test.hpp): with two pairs
   /// or more, each paired landmark (not a known one) takes its innovation less the others' mean; the
-  /// observations whose landmark's statistic exceeds `threshold` (> 0; 0: only the evidence is kept)
-  /// go to moved[0 .. return), in order. O(kMaxObservations), plus O(kMaxCandidates) for a pair
-  /// without its candidate index.
+  /// observations whose landmark's statistic exceeds `threshold` (> 0; 0: only the evidence is kept),
+  /// or whose landmark fails the static gate `static_gate_d2` (> 0; 0: off; moved()), go to
+  /// moved[0 .. return), in order. O(kMaxObservations), plus O(kMaxCandidates) for a pair without
+  /// its candidate index.
   [[gnu::noinline]] int test_motion(const Observations<T, B>& obs, const Prediction<T, B>& pred,
-                                    const Association<T, B>& assoc, T threshold,
+                                    const Association<T, B>& assoc, T threshold, T static_gate_d2,
                                     std::array<std::int16_t, B::kMaxObservations>& moved);
   /// The detection and clutter model the review learns (learn_detection, learn_clutter; reset by
   /// reset(), kept across restart(): it belongs to the sensor and the world, not to a local map).

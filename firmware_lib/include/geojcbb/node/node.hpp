@@ -85,6 +85,7 @@ class Node {
     s.invalid_field = msg_counters_.invalid_field;
     s.budget_hits = budget_hits_;
     s.ambiguous_scans = ambiguous_scans_;
+    s.movers = movers_;
     s.scans = scans_;
     s.instr_predict = last_predict_;
 #define GEOJCBB_STAGE_COUNT_COPY(name, meaning) s.instr_##name = last_.counts.name;
@@ -286,6 +287,7 @@ class Node {
     ++scans_;
     budget_hits_ += last_.diag.node_budget_hit ? 1u : 0u;
     ambiguous_scans_ += last_.reloc.ambiguous || last_.loop.ambiguous ? 1u : 0u;
+    movers_ += static_cast<std::uint32_t>(last_.review.movers);
     result_.batch_id = m.batch_id;
     result_.count = m.count;
     for (int i = 0; i < last_.count; ++i) {  // <= kMaxObservations
@@ -442,7 +444,7 @@ class Node {
   Output out_;
   CounterFn clock_ = nullptr;
   std::uint32_t map_id_ = 0;  ///< the current local map's number since CONFIG or RESET
-  std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, ambiguous_scans_ = 0, last_predict_ = 0,
+  std::uint32_t boot_id_ = 0, scans_ = 0, budget_hits_ = 0, ambiguous_scans_ = 0, movers_ = 0, last_predict_ = 0,
                 stack_high_water_ = 0;
   std::uint16_t tx_seq_ = 0, rx_seq_ = 0, last_stream_seq_ = 0, stats_period_ = 0, since_stats_ = 0;
   std::uint8_t rx_type_ = 0;

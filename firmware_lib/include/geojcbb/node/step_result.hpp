@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "geojcbb/associate.hpp"
 #include "geojcbb/ekf/slam.hpp"
@@ -49,6 +50,21 @@ struct StepResult {
   /// The local map's closing rule fired (submap_landmarks, submap_distance_m, submap_scans): hand
   /// it over, then SlamStep::restart.
   bool submap_due = false;
+
+  /// A scan that is not used (lost, not aligned): every observation kUnmatched, no counts (the
+  /// loop check's and the window's stats are left as they were: neither ran).
+  void unused(int observations) {
+    count = observations;
+    diag = AssociationDiagnostics{};
+    local = ekf::LocalMapStats{};
+    review = ekf::ReviewStats{};
+    counts = StageCounts{};
+    for (int i = 0; i < count; ++i) {  // <= kMaxObservations
+      outcome[static_cast<std::size_t>(i)] = Outcome::kUnmatched;
+      feature[static_cast<std::size_t>(i)] = kUnmatched;
+      d2[static_cast<std::size_t>(i)] = std::numeric_limits<T>::infinity();
+    }
+  }
 };
 
 /// A free-running counter read before and after each stage (e.g. SysTick or an instruction count);

@@ -27,6 +27,7 @@
   X(window_commits, "hypothesis_windows_committed", "windows that committed a leader") \
   X(window_held_scans, "hypothesis_window_scans", "scans a window was open (the opening one included)") \
   X(regrouped, "cluster_first_regrouped", "observations cluster_first paired anew") \
-  X(merges, "landmarks_merged", "duplicates merged by evidence (duplicate_merge_d2)")
+  X(merges, "landmarks_merged", "duplicates merged by evidence (duplicate_merge_d2)") \
+  X(movers_caught, "movers_caught", "landmarks that failed the motion test (or the static gate with it) and became movers (motion_false_alarm)")
 // clang-format on
 #define GEOJCBB_RUN_COUNTER_MEMBER(name, key, doc) int name = 0;

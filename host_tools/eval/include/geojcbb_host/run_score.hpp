@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "geojcbb/core/association_types.hpp"
@@ -31,6 +32,9 @@ namespace geojcbb::host {
 struct MapLandmark {
   double x, y;
   int truth;  ///< true landmark index, or -1 when made from clutter
+  /// The nearest range it was observed at (made or paired) [m]; infinity where not recorded (the
+  /// global map of --submaps).
+  double closest_m = std::numeric_limits<double>::infinity();
 };
 
 /// The pose estimate at a time.
@@ -139,6 +143,11 @@ struct RunResult {
   long nis_pairings = 0;
   double nis_sum = 0;
   InnovationSums innovations;  ///< every pairing's innovation, per component (noise from innovations)
+  /// The world model at the end of the run (ekf/detection.hpp): p_D per range bin (learn_detection;
+  /// empty without), each bin pd_bin_m wide, and the clutter density (learn_clutter; 0 without).
+  std::vector<double> learned_pd;
+  double pd_bin_m = 0;
+  double clutter_density = 0;
   /// The pose estimate after every input (RunOptions::record_trace): what a real log without a
   /// true pose is scored by (GPS, trace.hpp).
   std::vector<TracePoint> trace;

@@ -853,6 +853,7 @@ struct Stats : Codec<Stats> {
   std::uint32_t invalid_field = 0;    ///< frames whose payload failed validation
   std::uint32_t budget_hits = 0;      ///< scans that ran out of the JCBB node budget
   std::uint32_t ambiguous_scans = 0;  ///< scans whose alignment had distinct poses within the margin
+  std::uint32_t movers = 0;           ///< landmarks that became movers (the world model's motion test)
   std::uint32_t scans = 0;            ///< scans processed
   std::uint32_t instr_predict = 0;
   // The last scan's step by stage: one field per row of the stage table (stage_counts.h).
@@ -876,6 +877,8 @@ struct Stats : Codec<Stats> {
         field("budget_hits", &Stats::budget_hits, range::any(), "scans", "scans that ran out of JCBB nodes"),
         field("ambiguous_scans", &Stats::ambiguous_scans, range::any(), "scans",
               "the relocaliser's or loop check's alignment had distinct poses within the margin: nothing committed"),
+        field("movers", &Stats::movers, range::any(), "landmarks",
+              "landmarks that failed the motion test (or the static gate with it) and became movers"),
         field("scans", &Stats::scans, range::any(), "scans", "scans processed"),
         field("instr_predict", &Stats::instr_predict, range::any(), kInstr, "the last odometry's prediction"),
 #define GEOJCBB_STATS_STAGE_FIELD(name, meaning) \
@@ -991,7 +994,7 @@ static_assert(!schema_layout(0x00).found && !schema_layout(0xFF).found);
 static_assert(Hello::kPayloadSize == 5 && Capabilities::kPayloadSize == 37 && Config::kPayloadSize == 170 &&
                   Reset::kPayloadSize == 36 && Relocalise::kPayloadSize == 24 && Odometry::kPayloadSize == 20 &&
                   OdomDelta::kPayloadSize == 36 && Pose::kFixedSize == 47 && Pose::kItemSize == 4 &&
-                  Stats::kPayloadSize == 96 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
+                  Stats::kPayloadSize == 100 && ObsBatch::kFixedSize == 5 && ObsBatch::kItemSize == 20 &&
                   AssocResult::kFixedSize == 5 && AssocResult::kItemSize == 9 && Submap::kFixedSize == 25 &&
                   Submap::kItemSize == 18 && SubmapCov::kFixedSize == 13 && SubmapCov::kItemSize == 4 &&
                   SubmapAck::kPayloadSize == 5 && SubmapSeed::kFixedSize == 9 && SubmapSeed::kItemSize == 24,

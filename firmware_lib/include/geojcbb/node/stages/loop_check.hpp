@@ -21,6 +21,7 @@
 #include "geojcbb/core/fmath.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/node/update_plan.hpp"
 #include "geojcbb/reloc/loop.hpp"
 
 namespace geojcbb::node {
@@ -230,13 +231,15 @@ class LoopCheck {
   FeatureId surveyed_end_ = 0;  ///< landmarks with a smaller id are surveyed (surveyed())
 };
 
-/// A committed closure's rounds (the loop check's or the window's): the paired observations ranked by
-/// their landmark's position variance (the landmarks mapped before the drift first), rank k of p in
-/// round k rounds / p, the two most certain in the first. Out of line: its loops stay out of the
+/// A committed closure's rounds in the update's plan (the loop check's closure or the window's): the
+/// paired observations ranked by their landmark's position variance (the landmarks mapped before the
+/// drift first), rank k of p in round k rounds / p, the two most certain in the first. Out of line: its loops stay out of the
 /// caller's frame.  O(kMaxObservations^2)
 template <typename T, class B>
-[[gnu::noinline]] void closure_rounds(const MapView<T, B>& map, const Association<T, B>& assoc, int rounds,
-                                      std::array<std::uint8_t, B::kMaxObservations>& round) {
+[[gnu::noinline]] void closure_rounds(const MapView<T, B>& map, const Association<T, B>& assoc,
+                                      UpdatePlan<T, B>& plan) {
+  constexpr int rounds = UpdatePlan<T, B>::kClosureRounds;
+  auto& round = plan.round;
   std::array<T, B::kMaxObservations> var{};
   int p = 0;
   for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations

@@ -6,12 +6,13 @@
 //   take()    before the update: every track predicted (random walk), then each takes the nearest
 //             observation inside its gate (marked kMoverFeature: not paired, not made new); the
 //             track is updated with it (a Kalman update on the observation's world point)
-//   start()   a caught landmark's observation begins a track (the longest unseen makes room)
+//   admit()   each landmark that failed the test: its observation begins a track (start(): the
+//             longest unseen makes room); the step removes the landmark
 // A mover is not re-admitted: while its track lives, what it takes is neither paired nor mapped. A
 // track unseen for kForgetScans scans is dropped, and so is one whose sightings a point standing
 // still explains better than the walk by kStillNats (a static landmark the test flagged, or a mover
 // that stopped for good): what it saw is then new again, and the motion test must catch it again.
-// Bounds: O(kMaxObservations kMaxTracks) per scan.
+// Bounds: O(kMaxObservations kMaxTracks) per scan (a world point per observation).
 #pragma once
 
 #include <algorithm>
@@ -73,9 +74,9 @@ class Movers {
   Vec2<T> track(int k) const { return tracks_[static_cast<std::size_t>(k)].walk.at; }
 
   /// Before the update: every track a scan older (predicted, dropped after kForgetScans unseen),
-  /// then each takes the nearest observation inside its gate (d2 <= gate_d2 on the observation's
-  /// world point, with the pose's uncertainty), whatever the association made of it. @return the
-  /// observations taken.  O(kMaxObservations kMaxTracks)
+  /// then each in turn takes the nearest observation inside its gate that no track before it took
+  /// (d2 <= gate_d2 on the observation's world point, with the pose's uncertainty), whatever the
+  /// association made of it. @return the observations taken.  O(kMaxObservations kMaxTracks)
   [[gnu::noinline]] int take(const Observations<T, B>& obs, const MapView<T, B>& map, T gate_d2,
                              Association<T, B>& assoc) {
     int kept = 0;
@@ -87,37 +88,70 @@ class Movers {
       tracks_[static_cast<std::size_t>(kept++)] = t;
     }
     count_ = kept;
+    // Each track's nearest observation in its gate; each observation's world point computed once.
+    std::array<int, kMaxTracks> best;
+    std::array<T, kMaxTracks> best_d2;
+    std::array<Vec2<T>, kMaxTracks> best_p;
+    std::array<Mat2<T>, kMaxTracks> best_R;
+    best.fill(-1);
+    best_d2.fill(gate_d2);
+    // Observation i (world point p, covariance Rw) for track u: kept when it is the nearest yet.
+    const auto consider = [&](std::size_t u, int i, const Vec2<T>& p, const Mat2<T>& Rw) {
+      const T d2 = mahalanobis2(p - tracks_[u].walk.at, tracks_[u].walk.P + Rw);
+      if (!(d2 <= best_d2[u])) return;
+      best_d2[u] = d2;
+      best[u] = i;
+      best_p[u] = p;
+      best_R[u] = Rw;
+    };
+    for (int i = 0; i < obs.count && count_ > 0; ++i) {  // <= kMaxObservations
+      if (assoc.feature[i] == kMoverFeature) continue;
+      Mat2<T> Rw;
+      const Vec2<T> p = world_point(obs, map, i, Rw);
+      for (int k = 0; k < count_; ++k) consider(static_cast<std::size_t>(k), i, p, Rw);  // <= kMaxTracks
+    }
     int taken = 0;
     for (int k = 0; k < count_; ++k) {  // <= kMaxTracks
-      Track& t = tracks_[static_cast<std::size_t>(k)];
-      int best = -1;
-      T best_d2 = gate_d2;
-      Vec2<T> best_p;
-      Mat2<T> best_R;
-      for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
-        if (assoc.feature[i] == kMoverFeature) continue;
-        Mat2<T> Rw;
-        const Vec2<T> p = world_point(obs, map, i, Rw);
-        const T d2 = mahalanobis2(p - t.walk.at, t.walk.P + Rw);
-        if (d2 <= best_d2) {
-          best_d2 = d2;
-          best = i;
-          best_p = p;
-          best_R = Rw;
+      const auto u = static_cast<std::size_t>(k);
+      // An earlier track took this one's nearest: its nearest among the rest, as if the tracks had
+      // looked in turn (the rare case pays the world points again).
+      if (best[u] >= 0 && assoc.feature[best[u]] == kMoverFeature) {
+        best[u] = -1;
+        best_d2[u] = gate_d2;
+        for (int i = 0; i < obs.count; ++i) {  // <= kMaxObservations
+          if (assoc.feature[i] == kMoverFeature) continue;
+          Mat2<T> Rw;
+          const Vec2<T> p = world_point(obs, map, i, Rw);
+          consider(u, i, p, Rw);
         }
       }
-      if (best < 0) continue;
+      if (best[u] < 0) continue;
+      Track& t = tracks_[u];
       // Which explains the sighting better, a point on a random walk or one that stands still?
-      t.still = std::max(t.still + t.stand.update(best_p, best_R) - t.walk.update(best_p, best_R), -kStillNats);
+      t.still =
+          std::max(t.still + t.stand.update(best_p[u], best_R[u]) - t.walk.update(best_p[u], best_R[u]), -kStillNats);
       t.unseen = 0;
       if (t.still >= kStillNats) {  // it stands still: not a mover after all, the observation is free
         t.unseen = kForgetScans;    // dropped at the next scan
         continue;
       }
-      set_mover(assoc, best);
+      set_mover(assoc, best[u]);
       ++taken;
     }
     return taken;
+  }
+
+  /// The landmarks that failed the motion test (observations `moved[0 .. n)`, ekf::Slam::test_motion)
+  /// each begin a track. @return in ids[0 .. n) their landmarks, for the step to remove.
+  /// O(kMaxObservations kMaxTracks)
+  [[gnu::noinline, gnu::cold]] void admit(const Observations<T, B>& obs, const MapView<T, B>& map,
+                                          const std::array<std::int16_t, B::kMaxObservations>& moved, int n,
+                                          Association<T, B>& assoc, std::array<FeatureId, B::kMaxObservations>& ids) {
+    for (int k = 0; k < n; ++k) {  // <= kMaxObservations
+      const int i = moved[static_cast<std::size_t>(k)];
+      ids[static_cast<std::size_t>(k)] = assoc.feature[i];
+      start(obs, map, i, assoc);
+    }
   }
 
   /// Observation i, whose landmark failed the motion test, begins a track (the longest unseen makes

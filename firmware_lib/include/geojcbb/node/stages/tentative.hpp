@@ -5,7 +5,8 @@
 //                offered to the tentative candidates (smallest d2 first, one each); a tentative
 //                landmark that jumped is a mover, and its landmark is removed after the review
 //   follow()     after pair(): an observation at a remembered mover is that mover
-//   set_aside()  before the update: the pairs with a tentative landmark move only it (round kAlone)
+//   set_aside()  before the update: the pairs with a tentative landmark move only it (the update's
+//                plan holds them alone, node/update_plan.hpp)
 //   catch_movers() before the review: a paired landmark that fails the static gate is a mover
 // Bounds: O(m^2 n_c) to pair; O(m kMaxMovers) for the movers.
 #pragma once
@@ -17,6 +18,7 @@
 #include "geojcbb/core/association_config.hpp"
 #include "geojcbb/gate/compatibility.hpp"
 #include "geojcbb/node/stages/map_view.hpp"
+#include "geojcbb/node/update_plan.hpp"
 
 namespace geojcbb::node {
 
@@ -31,8 +33,6 @@ class Tentative {
   static constexpr int kMaxMovers = 4;
   static constexpr int kMoverMemoryScans = 50;
   static constexpr T kMoverReach_m = T(1);
-  /// The update round of a pair set aside (no round of the filter's update).
-  static constexpr std::uint8_t kAlone = 255;
 
   void reset() {
     count_ = 0;
@@ -126,22 +126,20 @@ class Tentative {
     }
   }
 
-  /// Before the update: the pairs with a tentative landmark set aside (round kAlone), the others in
-  /// round 0 unless a closure ordered them. @return whether any pair was set aside
-  [[gnu::noinline, gnu::cold]] bool set_aside(const MapView<T, B>& map, const Association<T, B>& assoc, bool closing,
-                                              std::array<std::uint8_t, B::kMaxObservations>& round) const {
-    bool any = false;
+  /// Before the update: the pairs with a tentative landmark held alone in the plan (round kAlone),
+  /// the others in round 0 unless a closure ordered them.  O(kMaxObservations)
+  [[gnu::noinline, gnu::cold]] void set_aside(const MapView<T, B>& map, const Association<T, B>& assoc,
+                                              UpdatePlan<T, B>& plan) const {
     for (int i = 0; i < assoc.count; ++i) {  // <= kMaxObservations
       const int k = map.slot_of(assoc.feature[i]);
       const bool alone = k >= 0 && !map.confirmed(k);
       if (alone) {
-        round[static_cast<std::size_t>(i)] = kAlone;
-      } else if (!closing) {
-        round[static_cast<std::size_t>(i)] = 0;
+        plan.round[static_cast<std::size_t>(i)] = UpdatePlan<T, B>::kAlone;
+      } else if (!plan.close.commit) {
+        plan.round[static_cast<std::size_t>(i)] = 0;
       }
-      any = any || alone;
+      plan.alone = plan.alone || alone;
     }
-    return any;
   }
 
   /// Before the review: a paired landmark that fails the static gate (the review removes it) is
