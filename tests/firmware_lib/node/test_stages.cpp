@@ -43,6 +43,23 @@ void observe_both(const Mat2<T>& R, FeatureId a, FeatureId b, Observations<T, B>
   assoc.pairings = 2;
 }
 
+/// One scan of the two landmarks, paired, and what the plan needs.
+template <typename T>
+struct PlanRig {
+  FeatureId a = -1, b = -1;
+  Mat2<T> R;
+  std::unique_ptr<ekf::Slam<T, B>> s = two_landmarks<T>(a, b, R);
+  Observations<T, B> obs;
+  std::unique_ptr<Association<T, B>> assoc = std::make_unique<Association<T, B>>();
+  std::unique_ptr<ekf::SlamWorkspace<T, B>> ws = std::make_unique<ekf::SlamWorkspace<T, B>>();
+  node::UpdatePlan<T, B> plan;
+  PlanRig() {
+    observe_both(R, a, b, obs, *assoc);
+    plan.clear();
+    plan.round.fill(0);
+  }
+};
+
 }  // namespace
 
 TEST_CASE("submap close: each limit at a settled pose, the fill level once a landmark was added") {
@@ -110,29 +127,26 @@ TEST_CASE("submap close: the next map keeps the confirmed landmarks of the last 
 
 TEST_CASE_TEMPLATE("update plan: a pair held alone moves only its landmark; the rest of the scan moves the pose", T,
                    float, double) {
-  FeatureId a = -1, b = -1;
-  Mat2<T> R;
-  auto s = two_landmarks<T>(a, b, R);
-  Observations<T, B> obs;
-  auto assoc = std::make_unique<Association<T, B>>();
-  observe_both(R, a, b, obs, *assoc);
-  auto ws = std::make_unique<ekf::SlamWorkspace<T, B>>();
-  node::UpdatePlan<T, B> plan;
-  plan.clear();
-  plan.round[0] = 0;
+  PlanRig<T> rig;
+  auto& s = rig.s;
+  auto& plan = rig.plan;
+  const FeatureId b = rig.b;
+  const Mat2<T> R = rig.R;
   plan.round[1] = node::UpdatePlan<T, B>::kAlone;
   plan.alone = true;
   const Pose2<T> x0 = s->pose();
   const Vec2<T> lb0 = s->landmark(s->index_of(b));
   // Only observation 0 in the filter's update: the same as a scan without observation 1.
-  auto only = two_landmarks<T>(a, b, R);
+  FeatureId a2 = -1, b2 = -1;  // the same ids again
+  Mat2<T> R2;
+  auto only = two_landmarks<T>(a2, b2, R2);
   Observations<T, B> obs0;
-  REQUIRE(obs0.push(obs.z[0], R) == Status::kOk);
-  auto assoc0 = std::make_unique<Association<T, B>>(*assoc);
+  REQUIRE(obs0.push(rig.obs.z[0], R) == Status::kOk);
+  auto assoc0 = std::make_unique<Association<T, B>>(*rig.assoc);
   assoc0->count = 1;
   assoc0->pairings = 1;
-  REQUIRE(only->update(obs0, *assoc0, *ws, nullptr, nullptr, 0) == Status::kOk);
-  REQUIRE(plan.apply(obs, *assoc, *s, *ws) == Status::kOk);
+  REQUIRE(only->update(obs0, *assoc0, *rig.ws, nullptr, nullptr, 0) == Status::kOk);
+  REQUIRE(plan.apply(rig.obs, *rig.assoc, *s, *rig.ws) == Status::kOk);
   CHECK(s->pose().x == doctest::Approx(only->pose().x));  // observation 1 moved nothing but its landmark
   CHECK(s->pose().y == doctest::Approx(only->pose().y));
   CHECK(s->pose().theta == doctest::Approx(only->pose().theta));
@@ -142,24 +156,15 @@ TEST_CASE_TEMPLATE("update plan: a pair held alone moves only its landmark; the 
 
 TEST_CASE_TEMPLATE("update plan: a closure inflates the pose block and applies its rounds; off, nothing inflates", T,
                    float, double) {
-  FeatureId a = -1, b = -1;
-  Mat2<T> R;
-  auto closed = two_landmarks<T>(a, b, R);
-  auto plain = two_landmarks<T>(a, b, R);
-  Observations<T, B> obs;
-  auto assoc = std::make_unique<Association<T, B>>();
-  observe_both(R, a, b, obs, *assoc);
-  auto ws = std::make_unique<ekf::SlamWorkspace<T, B>>();
-  node::UpdatePlan<T, B> plan;
-  plan.clear();
-  plan.round.fill(0);
-  REQUIRE(plan.apply(obs, *assoc, *plain, *ws) == Status::kOk);
+  PlanRig<T> plain, closed;
+  REQUIRE(plain.plan.apply(plain.obs, *plain.assoc, *plain.s, *plain.ws) == Status::kOk);
+  auto& plan = closed.plan;
   plan.close.commit = true;
-  plan.close.at = closed->pose();
+  plan.close.at = closed.s->pose();
   plan.close.Q = Mat3<T>::Identity() * T(1);
   plan.round[1] = 1;  // the second pair in the second round
-  REQUIRE(plan.apply(obs, *assoc, *closed, *ws) == Status::kOk);
+  REQUIRE(plan.apply(closed.obs, *closed.assoc, *closed.s, *closed.ws) == Status::kOk);
   // The inflated pose follows the observations further than the plain update does.
-  CHECK(std::abs(closed->pose().x - plain->pose().x) > T(0));
-  CHECK(closed->pose_covariance()(0, 0) > plain->pose_covariance()(0, 0));
+  CHECK(std::abs(closed.s->pose().x - plain.s->pose().x) > T(0));
+  CHECK(closed.s->pose_covariance()(0, 0) > plain.s->pose_covariance()(0, 0));
 }
