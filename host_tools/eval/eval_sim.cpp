@@ -56,7 +56,8 @@ const std::vector<std::string> kSimCsvColumns{"scans",
                                               "ambiguous_scans",
                                               "fp_clutter",
                                               "fp_mover",
-                                              "movers_in_map"};
+                                              "movers_in_map",
+                                              "movers_caught"};
 
 struct SimOptions {
   std::vector<std::string> scenarios;

@@ -516,6 +516,7 @@ int run_mrclam_report(const MrclamOptions& o, const std::string& out_dir, bool p
     print_submaps(o.strategies, agg, stdout);
     if (!o.runner) print_movers(o.strategies, movers, rows);
     std::vector<std::string> names;
+    names.reserve(o.strategies.size());
     for (const Method& m : o.strategies) names.push_back(m.name());
     print_world_model(names, world, &labelled, stdout);
     std::printf(

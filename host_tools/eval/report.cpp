@@ -154,12 +154,31 @@ ReportRow RunAggregate::group_row(const std::string& name) const {
 }
 
 const std::vector<std::string>& run_csv_columns() {
-  static const std::vector<std::string> c{
-      "scans",       "observations",        "tp",           "tn",           "fp",
-      "fn",          "precision",           "recall",       "f1",           "association_s",
-      "run_s",       "mean_abs_x_m",        "mean_abs_y_m", "landmarks",    "spurious_in_map",
-      "budget_hits", "relocalised_at_scan", "anees",        "duplicates",   "fp_clutter",
-      "group_f1",    "ambiguous_scans",     "fp_mover",     "movers_in_map"};
+  static const std::vector<std::string> c{"scans",
+                                          "observations",
+                                          "tp",
+                                          "tn",
+                                          "fp",
+                                          "fn",
+                                          "precision",
+                                          "recall",
+                                          "f1",
+                                          "association_s",
+                                          "run_s",
+                                          "mean_abs_x_m",
+                                          "mean_abs_y_m",
+                                          "landmarks",
+                                          "spurious_in_map",
+                                          "budget_hits",
+                                          "relocalised_at_scan",
+                                          "anees",
+                                          "duplicates",
+                                          "fp_clutter",
+                                          "group_f1",
+                                          "ambiguous_scans",
+                                          "fp_mover",
+                                          "movers_in_map",
+                                          "movers_caught"};
   return c;
 }
 
@@ -221,6 +240,8 @@ std::string run_csv(const RunResult& r, double run_s, const std::vector<std::str
       o << r.fp_mover;
     else if (c == "movers_in_map")
       o << r.movers_in_map;
+    else if (c == "movers_caught")
+      o << r.movers_caught;
     else if (c == "group_f1")
       o << r.group_score.f1();
     else

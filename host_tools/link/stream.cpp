@@ -31,9 +31,9 @@ std::string describe_stats(const proto::Stats& st) {
   char line[320];
   std::snprintf(line, sizeof line,
                 "frames ok %u, bad CRC %u, bad length %u, overrun %u, unknown type %u, invalid field %u, scans %u, "
-                "budget hits %u",
+                "budget hits %u, movers %u",
                 st.frames_ok, st.bad_crc, st.bad_length, st.overrun, st.unknown_type, st.invalid_field, st.scans,
-                st.budget_hits);
+                st.budget_hits, st.movers);
   std::string s = line;
   if (st.stack_high_water_bytes > 0) {  // measured by boards that paint their stack (not the desktop device)
     s += ", stack high-water " + std::to_string(st.stack_high_water_bytes) + " bytes";

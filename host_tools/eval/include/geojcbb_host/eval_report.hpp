@@ -137,19 +137,19 @@ inline void print_tables(const std::vector<ReportRow>& rows, std::FILE* f, bool 
         "False pairs: runs with more than 5; of a landmark's observation paired with another landmark's map "
         "landmark, that map landmark a duplicate (made after the first of its identity) or the original; "
         "clutter paired, of which a simulated mover's observations, and the landmarks made from movers still mapped "
-        "at the end; with --loop-check, closures committed and scans held pending; with --duplicate-merge-d2, "
+        "at the end; landmarks caught as movers (the world model's motion test and, with it, the static gate); with --loop-check, closures committed and scans held pending; with --duplicate-merge-d2, "
         "duplicates merged; a landmark's false pairs by place: another landmark of its group (MRCLAM: within a row of "
         "tubes) or elsewhere; with --hypotheses, windows opened, committed and scans open; with --cluster-first, observations "
         "paired anew\n");
-    std::fprintf(f, "  %-9s %10s %12s %12s %10s %7s %7s %9s %6s %7s %9s %10s %8s %9s %7s %9s\n", "strategy", "runs > 5",
-                 "duplicate", "original", "clutter", "mover", "in map", "closures", "held", "merged", "in group",
-                 "elsewhere", "windows", "committed", "open", "regrouped");
+    std::fprintf(f, "  %-9s %10s %12s %12s %10s %7s %7s %7s %9s %6s %7s %9s %10s %8s %9s %7s %9s\n", "strategy",
+                 "runs > 5", "duplicate", "original", "clutter", "mover", "in map", "caught", "closures", "held",
+                 "merged", "in group", "elsewhere", "windows", "committed", "open", "regrouped");
     for (const ReportRow& r : rows) {
       if (r.runs > 0)
-        std::fprintf(f, "  %-9s %10d %12d %12d %10d %7d %7d %9d %6d %7d %9d %10d %8d %9d %7d %9d\n", r.name.c_str(),
+        std::fprintf(f, "  %-9s %10d %12d %12d %10d %7d %7d %7d %9d %6d %7d %9d %10d %8d %9d %7d %9d\n", r.name.c_str(),
                      r.runs_over_5_fp, r.fp_to_duplicate, r.fp_to_original, r.fp_clutter, r.fp_mover, r.movers_in_map,
-                     r.loop_commits, r.loop_held_scans, r.merges, r.fp_in_group, r.fp_other_group, r.windows,
-                     r.window_commits, r.window_held_scans, r.regrouped);
+                     r.movers_caught, r.loop_commits, r.loop_held_scans, r.merges, r.fp_in_group, r.fp_other_group,
+                     r.windows, r.window_commits, r.window_held_scans, r.regrouped);
     }
   }
   std::fprintf(f, "Pose and map (means over the runs)\n");
