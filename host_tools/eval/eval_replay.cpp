@@ -19,6 +19,7 @@
 #include "geojcbb_host/eval_cli.hpp"
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/event_log.hpp"
+#include "geojcbb_host/batch.hpp"
 #include "geojcbb_host/gps.hpp"
 #include "geojcbb_host/world_model_report.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
@@ -46,6 +47,8 @@ struct ReplayOptions {
   double group_radius_m = 0;  ///< > 0: landmark groups for the group-level score
   bool known_map = false;
   bool write_path = false;  ///< --write-path: path.csv, each strategy's pose after every input; map.csv, its final map
+  bool batch = false;       ///< --batch: the batch reference beside each strategy (host_tools/mapping)
+  BatchOptions batch_options;
   RunOptions run;
   GpsOptions gps;      ///< the screening (the antenna from the log's meta)
   RunInputsFn runner;  ///< empty: in process; else each replay streamed to a device
@@ -203,6 +206,53 @@ InnovationEstimate noise_from_innovations(const replay::LogSource& source, const
   return e;
 }
 
+// The batch reference (host_tools/mapping, batch.hpp): per strategy, every pose and landmark solved
+// at once with the pairings its steps made, beside the filter: the GPS RMSE of both where the log
+// has fixes, the mean position error of both where it has truth lines; with labels, one more row
+// solved with the labels as the association. Printed and written to batch.csv.
+void batch_table(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg,
+                 const std::vector<BatchRecorder>& recorders, const replay::LogSource& source, const RunOptions& base,
+                 const replay::EventLog& log, const GpsOptions& gps_opt, bool labelled, const BatchOptions& bo,
+                 const std::string& out_dir) {
+  replay::LogSource src = source;
+  const StepSettings<double> ss = step_settings(base, src.sensor);
+  const Mount<double> mount{ss.sensor_x_m, ss.sensor_y_m, ss.sensor_theta_rad};
+  std::printf(
+      "\nBatch reference (every pose and landmark at once, Ceres' sparse Cholesky; %s; the association "
+      "each strategy's steps made)\n",
+      bo.huber > 0 ? ("Huber loss at " + std::to_string(bo.huber).substr(0, 4) + " sigma").c_str()
+                   : "plain least squares");
+  std::printf(
+      "| association | filter GPS RMSE [m] | batch GPS RMSE [m] | filter position error [m] | batch position "
+      "error [m] | poses | landmarks | observations | iterations | cost (start -> end) | converged | time [s] "
+      "|\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  std::ofstream csv(out_dir + "/batch.csv");
+  csv << "association,filter_gps_rmse_m,batch_gps_rmse_m,filter_position_error_m,batch_position_error_m,poses,landmarks,"
+         "observations,iterations,initial_cost,final_cost,converged,solve_s\n";
+  auto row = [&](const std::string& name, const BatchProblem& p, const RunResult& filter) {
+    const BatchResult b = solve_batch(p, bo);
+    const double f = log.gps.empty() ? NAN : score_gps(filter.trace, log.gps, gps_opt).rmse_m;
+    const double g = log.gps.empty() ? NAN : score_gps(b.trace, log.gps, gps_opt).rmse_m;
+    const double fe = mean_position_error(p, p.initial), be = mean_position_error(p, b.poses);
+    std::printf("| %s | %.2f | %.2f | %.3f | %.3f | %zu | %zu | %zu | %d | %.4g -> %.4g | %s | %.1f |\n", name.c_str(),
+                f, g, fe, be, p.initial.size(), p.landmark_initial.size(), p.obs.size(), b.iterations, b.initial_cost,
+                b.final_cost, b.converged ? "yes" : "no", b.solve_s);
+    csv << name << ',' << f << ',' << g << ',' << fe << ',' << be << ',' << p.initial.size() << ','
+        << p.landmark_initial.size() << ',' << p.obs.size() << ',' << b.iterations << ',' << b.initial_cost << ','
+        << b.final_cost << ',' << (b.converged ? 1 : 0) << ',' << b.solve_s << '\n';
+  };
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    if (!agg[k].have_first) continue;
+    row(strategies[k].name(), batch_problem(src, recorders[k], agg[k].first.trace, mount, false), agg[k].first);
+  }
+  const auto first = std::find_if(agg.begin(), agg.end(), [](const RunAggregate& a) { return a.have_first; });
+  if (labelled && first != agg.end()) {
+    const auto k = static_cast<std::size_t>(first - agg.begin());
+    row("labels", batch_problem(src, recorders[k], first->first.trace, mount, true), first->first);
+  }
+  if (!csv) throw std::runtime_error("cannot write " + out_dir + "/batch.csv");
+}
+
 int run_replay(const ReplayOptions& o) {
   const replay::EventLog log = replay::read_event_log(o.log);
   const bool labelled = log.labelled();
@@ -226,7 +276,7 @@ int run_replay(const ReplayOptions& o) {
   replay::LogSource source(log, noise);  // throws when a line has no noise from anywhere
   const std::vector<Eigen::Vector2d> positions = replay::landmark_positions(log);
   RunOptions base = o.run;
-  base.record_trace = !log.gps.empty() || o.write_path;
+  base.record_trace = !log.gps.empty() || o.write_path || o.batch;
   GpsOptions gps_opt = o.gps;
   if (log.meta.count("gps_x_m")) gps_opt.antenna_x_m = log.meta.at("gps_x_m");
   if (log.meta.count("gps_y_m")) gps_opt.antenna_y_m = log.meta.at("gps_y_m");
@@ -288,10 +338,12 @@ int run_replay(const ReplayOptions& o) {
 
   std::vector<RunAggregate> agg(strategies.size());
   std::vector<WorldModelSums> world(strategies.size());
+  std::vector<BatchRecorder> recorders(strategies.size());  // --batch: what each strategy's steps made
   const double wall_s =
       run_parallel(strategies.size(), o.runner ? 1 : o.flags.jobs, o.flags.progress, [&](std::size_t k) {
         RunOptions ro = base;
         strategies[k].apply(ro);
+        if (o.batch) ro.on_scan = [&rec = recorders[k]](const ScanOutcome& sc) { rec.on_scan(sc); };
         replay::LogSource src = source;  // each thread its own position
         src.rewind();
         const auto a = std::chrono::steady_clock::now();
@@ -318,6 +370,7 @@ int run_replay(const ReplayOptions& o) {
   print_submaps(strategies, agg, stdout);
   {
     std::vector<std::string> names;
+    names.reserve(strategies.size());
     for (const Method& m : strategies) names.push_back(m.name());
     DetectionTable table;
     replay::LogSource src = source;
@@ -337,6 +390,10 @@ int run_replay(const ReplayOptions& o) {
       for (std::size_t i = 0; i < gps[k].t.size(); ++i)
         e << strategies[k].name() << ',' << gps[k].t[i] << ',' << gps[k].error_m[i] << '\n';
     if (!e) throw std::runtime_error("cannot write " + o.flags.out_dir + "/gps_error.csv");
+  }
+  if (o.batch) {
+    if (o.runner) throw std::runtime_error("--batch: in process only (a device does not report its steps' pairings)");
+    batch_table(strategies, agg, recorders, source, base, log, gps_opt, labelled, o.batch_options, o.flags.out_dir);
   }
   if (o.write_path) {  // per strategy: the pose the run reported after each input
     std::ofstream p(o.flags.out_dir + "/path.csv");
@@ -529,6 +586,13 @@ Subcommand add_replay_command(CLI::App& app) {
   rp->add_flag("--write-path", o->write_path,
                "path.csv: each strategy's pose estimate after every prediction and scan, and map.csv: its final "
                "map's landmarks (with --submaps, the global map, in the global frame)");
+  rp->add_flag("--batch", o->batch,
+               "the batch reference: every pose and landmark solved at once (Ceres) with each strategy's pairings, "
+               "and with the labels where the log has them, its GPS RMSE beside the filter's (batch.csv)");
+  rp->add_option("--batch-huber", o->batch_options.huber,
+                 "--batch: Huber's threshold on an observation's whitened residual [sigma] (0: plain least squares)")
+      ->default_val(o->batch_options.huber)
+      ->check(CLI::Range(0.0, 100.0));
   auto mrclam_rules = std::make_shared<bool>(false);
   rp->add_flag("--mrclam-rules", *mrclam_rules,
                "the MRCLAM replay's landmark rules (miss probability 1e-5, static gate 0.95, new if taken, occlusion "
