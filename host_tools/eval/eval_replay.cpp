@@ -209,7 +209,8 @@ InnovationEstimate noise_from_innovations(const replay::LogSource& source, const
 // The batch reference (host_tools/mapping, batch.hpp): per strategy, every pose and landmark solved
 // at once with the pairings its steps made, beside the filter: the GPS RMSE of both where the log
 // has fixes, the mean position error of both where it has truth lines; with labels, one more row
-// solved with the labels as the association. Printed and written to batch.csv.
+// solved with the labels as the association (from TRUTH's run when it ran). Printed and written to
+// batch.csv.
 void batch_table(const std::vector<Method>& strategies, const std::vector<RunAggregate>& agg,
                  const std::vector<BatchRecorder>& recorders, const replay::LogSource& source, const RunOptions& base,
                  const replay::EventLog& log, const GpsOptions& gps_opt, bool labelled, const BatchOptions& bo,
@@ -245,10 +246,14 @@ void batch_table(const std::vector<Method>& strategies, const std::vector<RunAgg
     if (!agg[k].have_first) continue;
     row(strategies[k].name(), batch_problem(src, recorders[k], agg[k].first.trace, mount, false), agg[k].first);
   }
-  const auto first = std::find_if(agg.begin(), agg.end(), [](const RunAggregate& a) { return a.have_first; });
-  if (labelled && first != agg.end()) {
-    const auto k = static_cast<std::size_t>(first - agg.begin());
-    row("labels", batch_problem(src, recorders[k], first->first.trace, mount, true), first->first);
+  // The labels' batch starts from the best run there is: TRUTH's (the filter with the labels as its
+  // association) when it ran, else the first strategy's.
+  std::size_t start = strategies.size();
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    if (agg[k].have_first && (start == strategies.size() || strategies[k].oracle)) start = k;
+  }
+  if (labelled && start < strategies.size()) {
+    row("labels", batch_problem(src, recorders[start], agg[start].first.trace, mount, true), agg[start].first);
   }
   if (!csv) throw std::runtime_error("cannot write " + out_dir + "/batch.csv");
 }
