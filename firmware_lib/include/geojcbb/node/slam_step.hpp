@@ -313,7 +313,10 @@ class SlamStep {
   [[gnu::noinline]] Status commit(const Observations<T, B>& obs, const MapView<T, B>& map, bool hold,
                                   StepResult<T, B>& out, CounterFn clock) {
     const std::uint32_t t2 = clock ? clock() : 0;
-    const int caught = c_.motion_t > T(0) ? movers(obs, map) : 0;
+    // The world model's movers set aside (compiled out: configure() refused motion_false_alarm).
+    const int caught = c_.motion_t > T(0) ? movers_.run(obs, map, pred_, static_cast<T>(c_.cfg.gate.individual),
+                                                        c_.motion_t, T(c_.policy.static_gate_d2), assoc_, slam_)
+                                          : 0;
     if (plan_.close.commit) closure_rounds(map, assoc_, plan_);
     if (c_.cfg.tentative_isolated) tentative_.set_aside(map, assoc_, plan_);
     const Status st = plan_.apply(obs, assoc_, slam_, ekf_ws_);
@@ -351,27 +354,6 @@ class SlamStep {
     out.counts.augment_review = t4 - t3;
     out.counts.existence = existence;
     return Status::kOk;
-  }
-
-  /// The world model's motion (stages/movers.hpp), before the update: the movers' tracks take the
-  /// observations in their gates; each remaining pair's landmark takes the motion test and the static
-  /// gate, and one that fails leaves the map (marginalised) while its observation begins a track. The
-  /// update and the review then see neither. @return the landmarks that became movers.
-  [[gnu::noinline]] int movers(const Observations<T, B>& obs, const MapView<T, B>& map) {
-    if constexpr (!OptionalStages<B>::kWorldModel) {  // compiled out: configure() refused the option
-      (void)obs;
-      (void)map;
-      return 0;
-    } else {
-      movers_.take(obs, map, c_.cfg.gate.individual, assoc_);
-      std::array<std::int16_t, B::kMaxObservations> moved;
-      std::array<FeatureId, B::kMaxObservations> ids;
-      const int n = slam_.test_motion(obs, pred_, assoc_, c_.motion_t, T(c_.policy.static_gate_d2), moved);
-      movers_.admit(obs, map, moved, n, assoc_, ids);
-      int caught = 0;
-      for (int k = 0; k < n; ++k) caught += slam_.forget(ids[static_cast<std::size_t>(k)]) == Status::kOk;  // <= n
-      return caught;
-    }
   }
 
   ekf::Slam<T, B> slam_;

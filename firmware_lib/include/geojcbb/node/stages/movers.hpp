@@ -6,8 +6,8 @@
 //   take()    before the update: every track predicted (random walk), then each takes the nearest
 //             observation inside its gate (marked kMoverFeature: not paired, not made new); the
 //             track is updated with it (a Kalman update on the observation's world point)
-//   admit()   each landmark that failed the test: its observation begins a track (start(): the
-//             longest unseen makes room); the step removes the landmark
+//   run()     take(), then the motion test (ekf::Slam::test_motion); each landmark that fails leaves
+//             the map and its observation begins a track (start(): the longest unseen makes room)
 // A mover is not re-admitted: while its track lives, what it takes is neither paired nor mapped. A
 // track unseen for kForgetScans scans is dropped, and so is one whose sightings a point standing
 // still explains better than the walk by kStillNats (a static landmark the test flagged, or a mover
@@ -40,6 +40,10 @@ void set_mover(Association<T, B>& assoc, int i) {
 /// The movers' stand-in in a configuration without the world model (OptionalStages::kWorldModel).
 struct NoMovers {
   void reset() {}
+  template <class... A>
+  static int run(A&&...) {
+    return 0;
+  }
   std::uint32_t caught() const { return 0; }
   int tracks() const { return 0; }
 };
@@ -141,17 +145,26 @@ class Movers {
     return taken;
   }
 
-  /// The landmarks that failed the motion test (observations `moved[0 .. n)`, ekf::Slam::test_motion)
-  /// each begin a track. @return in ids[0 .. n) their landmarks, for the step to remove.
-  /// O(kMaxObservations kMaxTracks)
-  [[gnu::noinline, gnu::cold]] void admit(const Observations<T, B>& obs, const MapView<T, B>& map,
-                                          const std::array<std::int16_t, B::kMaxObservations>& moved, int n,
-                                          Association<T, B>& assoc, std::array<FeatureId, B::kMaxObservations>& ids) {
+  /// The world model's motion, before the update (map upkeep by name: it removes landmarks from the
+  /// filter, as DuplicateMerge::merge merges them): the tracks take the observations in their gates
+  /// (take), each remaining pair's landmark takes the motion test and the static gate
+  /// (ekf::Slam::test_motion, `threshold`, `static_gate_d2`), and one that fails leaves the map
+  /// (marginalised) while its observation begins a track (start). The update and the review then see
+  /// neither. `map` views `slam`. @return the landmarks that became movers.
+  /// O(kMaxObservations kMaxTracks) and test_motion's
+  [[gnu::noinline]] int run(const Observations<T, B>& obs, const MapView<T, B>& map, const Prediction<T, B>& pred,
+                            T gate_d2, T threshold, T static_gate_d2, Association<T, B>& assoc, ekf::Slam<T, B>& slam) {
+    take(obs, map, gate_d2, assoc);
+    std::array<std::int16_t, B::kMaxObservations> moved;
+    const int n = slam.test_motion(obs, pred, assoc, threshold, static_gate_d2, moved);
+    int caught = 0;
     for (int k = 0; k < n; ++k) {  // <= kMaxObservations
       const int i = moved[static_cast<std::size_t>(k)];
-      ids[static_cast<std::size_t>(k)] = assoc.feature[i];
+      const FeatureId id = assoc.feature[i];
       start(obs, map, i, assoc);
+      caught += slam.forget(id) == Status::kOk;
     }
+    return caught;
   }
 
   /// Observation i, whose landmark failed the motion test, begins a track (the longest unseen makes
