@@ -48,6 +48,7 @@ struct SlamSession::State {
   double map_worst_s = 0;     // the current local map's slowest step
   double radius_m = 0;        // r + d
   double last_t = 0;          // the last scan's time
+  std::vector<std::pair<int, Pose2<double>>> local_trace;  // per trace point: its local map and pose there
   /// The pose and its covariance in the world: the local map's, through the global map's base.
   void world_pose(Pose2<double>& x, Eigen::Matrix3d& P) const {
     const ekf::Slam<double, EB>& slam = step.slam();
@@ -141,9 +142,10 @@ void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& glo
   j.t_s = t_s;
   j.worst_step_s = worst_step_s;
   j.global = global.landmarks();
+  const Eigen::Matrix3d base_cov = global.base_covariance();
   for (int a = 0; a < 3; ++a) {
     j.base[a] = global.state()(a);
-    j.base_sd[a] = std::sqrt(global.covariance()(a, a));
+    j.base_sd[a] = std::sqrt(base_cov(a, a));
   }
   st.joins.push_back(j);
 }
@@ -158,7 +160,7 @@ void take_global_map(RunResult& res, const GlobalMap& global, const std::vector<
     res.map.push_back({global.landmark(k).x(), global.landmark(k).y(), t});
     res.spurious_in_map += t < 0;
   }
-  res.map_cov = global.covariance().bottomRightCorner(2 * res.landmarks, 2 * res.landmarks);
+  res.map_cov = global.landmarks_covariance();
 }
 
 // The ground-truth association (the step's association override): each observation of a mapped
@@ -419,6 +421,23 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   if (s.global && r.submap_due) s.hand_over();
 }
 
+void SlamSession::trace(double t, std::vector<TracePoint>& trace) {
+  State& s = *st_;
+  trace.push_back({t, pose()});
+  if (s.global) s.local_trace.emplace_back(s.global->maps(), s.step.slam().pose());
+}
+
+void SlamSession::smoothed(std::vector<TracePoint>& trace) const {
+  const State& s = *st_;
+  if (!s.global || s.local_trace.size() != trace.size()) return;
+  for (std::size_t k = 0; k < trace.size(); ++k) {
+    const Eigen::Vector3d o = s.global->origin(s.local_trace[k].first);
+    const Pose2<double>& l = s.local_trace[k].second;
+    const double c = std::cos(o(2)), sn = std::sin(o(2));
+    trace[k].pose = {o(0) + c * l.x - sn * l.y, o(1) + sn * l.x + c * l.y, wrap_angle(o(2) + l.theta)};
+  }
+}
+
 RunResult SlamSession::finish() {
   State& s = *st_;
   if (s.global) {  // the last local map joined too; the map is the global one
@@ -468,9 +487,10 @@ RunResult run_inputs(RunSource& src, const RunOptions& opt) {
       session.predict(in.v_mps, in.w_radps, in.dt_s, in.sigma_v_mps, in.sigma_w_radps);
       t += in.dt_s;
     }
-    if (opt.record_trace) trace.push_back({t, session.pose()});
+    if (opt.record_trace) session.trace(t, trace);
   }
   RunResult r = session.finish();
+  session.smoothed(trace);
   r.trace = std::move(trace);
   return r;
 }

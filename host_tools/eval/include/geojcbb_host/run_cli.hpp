@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <map>
 #include <string>
 #include <type_traits>
 
@@ -61,6 +62,17 @@ inline void add_run_options(CLI::App& app, RunOptions& run) {
   app.add_flag("--join-remove-carried", run.join.remove_carried,
                "a landmark a local map was born with (carried over) and removed by its evidence leaves the global "
                "map, as a removed seed does (docs/submaps.md)");
+  app.add_option("--join-solver", run.join.solver,
+                 "how the global map is held: dense (the EKF-style join, one linearisation) or graph (every local map "
+                 "a factor, relinearised by Ceres at each join; docs/mapping.md)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, JoinOptions::Solver>{
+          {"dense", JoinOptions::Solver::kDense}, {"graph", JoinOptions::Solver::kGraph}}))
+      ->capture_default_str();
+  app.add_option("--join-loss", run.join.loss_confidence,
+                 "with --join-solver graph: Huber's loss on a local map's factor beyond chi2(this, its dimension); 0: "
+                 "none")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.999999));
 }
 
 }  // namespace geojcbb::host

@@ -175,6 +175,12 @@ class SlamSession {
   /// error and NEES (nullptr: not recorded).
   void scan(std::vector<SimObservation> scan, double t_s, const Pose2<double>* truth);
   Pose2<double> pose() const;
+  /// The pose in the world appended to `trace` at time t; with local maps, remembered in its local
+  /// map's frame too, for smoothed().
+  void trace(double t, std::vector<TracePoint>& trace);
+  /// With local maps: the trace's poses again through the global map's origins of their local maps
+  /// as they are now (kGraph: relinearised by every later join; dense: as they were).
+  void smoothed(std::vector<TracePoint>& trace) const;
   /// The result so far; finish() adds the final map and the means.
   RunResult finish();
 

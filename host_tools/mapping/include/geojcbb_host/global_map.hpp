@@ -1,4 +1,4 @@
-// host_tools/eval: the global map of sequential map joining (Tardos, Neira, Newman, Leonard 2002;
+// host_tools/mapping: the global map of sequential map joining (Tardos, Neira, Newman, Leonard 2002;
 // docs/submaps.md). The device (or the in-process step) keeps a local map of bounded size, closes it
 // on a rule (StepSettings::submap_*), hands it over whole and starts the next one at the robot's
 // pose, empty. The local maps are therefore independent: each is built from its own scans only,
@@ -16,7 +16,11 @@
 //      landmarks not paired stay; the base becomes the map's last pose.
 // While a map is built the host may seed it (seed(), seeded()) with the global landmarks near the
 // robot that it does not hold; their prior is divided out at the join like the carried ones'.
-// Dense double (Eigen), O(D^2 pairs) per join for D = 3 + 2 landmarks.
+// The state is held one of two ways (JoinOptions::solver): dense (Eigen, the full covariance, O(D^2)
+// per join for D = 3 + 2 landmarks), or as a factor graph (factor_graph.hpp): each joined map one
+// factor, relinearised by Ceres at every join, with the joint marginals the join reads recovered
+// exactly from a sparse factorisation (docs/mapping.md). The join's decisions are the same code on
+// both: they read the base, the landmarks near the map and their joint covariance (a view).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,7 +32,8 @@
 #include "geojcbb/core/association_types.hpp"
 #include "geojcbb/core/presets.hpp"
 #include "geojcbb/ekf/slam.hpp"
-#include "geojcbb_host/run_score.hpp"
+#include "geojcbb_host/factor_graph.hpp"
+#include "geojcbb_host/join_counts.hpp"
 
 namespace geojcbb::host {
 
@@ -88,6 +93,13 @@ struct JoinOptions {
   /// Victoria Park through the default-bounds device it set off a chain of maps born full
   /// (docs/submaps.md, "Carried landmarks removed").
   bool remove_carried = false;
+  /// How the global state is held and fused: kDense, the EKF-style join (one linearisation, the full
+  /// covariance); kGraph, the local maps as factors solved by Ceres and relinearised at every join.
+  enum class Solver { kDense, kGraph };
+  Solver solver = Solver::kDense;
+  int solver_iterations = 20;  ///< kGraph: Ceres' iterations per join at most
+  /// kGraph: Huber's loss on a map's factor beyond chi2(loss_confidence, its dimension) (0: none).
+  double loss_confidence = 0;
 };
 
 /// What one join did, and its pairs.
@@ -135,7 +147,12 @@ class GlobalMap {
                  Eigen::Matrix3d& P_global) const;
   int landmarks() const { return static_cast<int>(first_id_.size()); }
   Eigen::Vector2d landmark(int k) const { return x_.segment<2>(3 + 2 * k); }
-  Eigen::Matrix2d landmark_covariance(int k) const { return P_.block<2, 2>(3 + 2 * k, 3 + 2 * k); }
+  /// Global landmark k's marginal covariance.
+  Eigen::Matrix2d landmark_covariance(int k) const;
+  /// The base's (the current local map's origin) marginal covariance.
+  Eigen::Matrix3d base_covariance() const;
+  /// Every landmark's joint covariance (2 rows each, in their order): dense, O(landmarks^2).
+  Eigen::MatrixXd landmarks_covariance() const;
   /// Global landmark k's log-odds of existence: the last local map's that held it (which began from
   /// the global map's, carried or seeded), or the sum of two maps' that each made it (fused).
   double existence(int k) const { return exist_[static_cast<std::size_t>(k)]; }
@@ -143,32 +160,91 @@ class GlobalMap {
   FeatureId first_id(int k) const { return first_id_[static_cast<std::size_t>(k)]; }
   /// Local maps joined so far.
   int maps() const { return maps_; }
+  /// The origin of local map k (k <= maps(): maps() is the one being built) in the world: dense, as
+  /// it was when the map began (never revisited); kGraph, the solution's (relinearised since).
+  Eigen::Vector3d origin(int k) const;
   /// The local ids the last joined map kept into the next one (its Submap::carried): what the next
   /// map begins with.
   const std::vector<FeatureId>& carried_ids() const { return carried_ids_; }
-  /// The whole state [base, landmarks] and its covariance.
+  /// The estimate [base, landmarks] (kGraph: the solution's).
   const Eigen::VectorXd& state() const { return x_; }
-  const Eigen::MatrixXd& covariance() const { return P_; }
+  /// kGraph: the factor graph (null when dense) and the last join's solve.
+  const FactorGraph* graph() const { return graph_.get(); }
+  const GraphSolve& last_solve() const { return last_solve_; }
 
  private:
   struct Association;
+  /// What a join reads of the global state: the base and some landmarks (all of them when dense),
+  /// with their joint covariance. The join's decisions are taken on it.
+  struct View {
+    std::vector<int> g;  ///< view landmark -> global landmark
+    Eigen::VectorXd x;   ///< [base, landmarks g]
+    Eigen::MatrixXd P;
+  };
+  /// The landmarks a map shares with the global one (carried over or seeded: the same ids) and the
+  /// prior it began with on them (m0, P0 in the base's frame); the global landmarks it removed.
+  struct Shared {
+    std::vector<int> shared, target;   ///< index in the map; global landmark
+    std::vector<int> carried, seeded;  ///< positions in `shared`
+    std::vector<bool> is_shared;       ///< per local landmark
+    std::vector<bool> gone;            ///< per global landmark
+    Eigen::VectorXd m0;
+    Eigen::MatrixXd P0;
+  };
+  /// The association's answer between a map and a view.
+  struct Pairing {
+    std::vector<std::pair<int, int>> pairs;  ///< (local landmark, view landmark)
+    std::vector<bool> ambiguous;             ///< per local landmark: declined
+    bool compatible = true;
+  };
   /// The global landmark a local id was made into or fused with (-1: none).
   int global_index(FeatureId local) const;
   int index_of_first(FeatureId first) const;
+  Shared find_shared(const Submap& m, JoinResult& res) const;
+  /// The view a join of `m` reads: dense, the whole state (moved out, given back at the commit);
+  /// kGraph, the base, the shared ones' targets and every landmark a bound on the gate lets through,
+  /// with their joint marginal.
+  View open_view(const Submap& m, const Shared& sh);
+  /// The shared landmarks' update on the view, and its d2 figures (also for the seeded ones alone).
+  void update_shared(const Submap& m, const Shared& sh, const std::vector<int>& target_view, View& v,
+                     JoinResult& res) const;
   /// What the map's scans add on the landmarks it shares with the previous map: its information on
   /// them less the prior it began with (the previous map's, in its last pose's frame), as a
-  /// measurement of the global state (conditionally independent maps, Pinies and Tardos 2008).
-  /// With `apply` false the state is left as it was. @return the measurement's nu^T S^-1 nu; `dof`
-  /// its dimension (the directions the scans informed; 0: nothing to fuse, and 0 returned).
+  /// measurement of the view (conditionally independent maps, Pinies and Tardos 2008). With `apply`
+  /// false the view is left as it was. @return the measurement's nu^T S^-1 nu; `dof` its dimension
+  /// (the directions the scans informed; 0: nothing to fuse, and 0 returned). `target`: view rows.
   double shared_update(const Submap& m, const std::vector<int>& shared, const std::vector<int>& target,
-                       const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, bool apply, int& dof);
-  /// The global state with the map's rows u (its pose, its landmarks not shared) appended, given the
-  /// shared ones: X = [x_, base (+) u], P with every correlation.
+                       const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, bool apply, int& dof, View& v) const;
+  Pairing associate_map(const Submap& m, const Shared& sh, const View& v, const std::vector<int>& target_view,
+                        JoinResult& res) const;
+  /// The view with the map's rows u (its pose, its landmarks not shared) appended, given the shared
+  /// ones: X = [v.x, base (+) u], P with every correlation.
   void augment(const Submap& m, const std::vector<int>& u, const std::vector<int>& shared,
-               const std::vector<int>& target, Eigen::VectorXd& X, Eigen::MatrixXd& P) const;
+               const std::vector<int>& target_view, const View& v, Eigen::VectorXd& X, Eigen::MatrixXd& P) const;
+  /// The pairs' constraints tested with the full covariance and fused into X, P: the accepted pairs
+  /// (indices into `pairs`).
+  std::vector<int> fuse(const std::vector<std::pair<int, int>>& pairs, const std::vector<int>& row_of, bool compatible,
+                        Eigen::VectorXd& X, Eigen::MatrixXd& P, JoinResult& res) const;
+  /// kGraph: the map as a factor on the base, its end frame (at X's rows D0..) and the global
+  /// landmarks it holds (`var`: per local landmark, its graph variable; -1, marginalised out).
+  void add_factor(const Submap& m, const Shared& sh, const std::vector<int>& var, const Eigen::Vector3d& end);
+  /// kGraph: the joint marginals of the base with landmarks `gs` (cached until the next join).
+  void cache_joint(const std::vector<int>& gs) const;
+  std::unique_ptr<FactorGraph> graph_;
+  std::vector<int> var_of_;                                           ///< kGraph: global landmark -> its graph variable
+  std::vector<int> frame_of_map_ = {0};                               ///< kGraph: local map k's origin's frame
+  std::vector<Eigen::Vector3d> origins_ = {Eigen::Vector3d::Zero()};  ///< dense: each map's origin as it began
+  int base_frame_ = 0;                                                ///< kGraph: the base's frame
+  Eigen::Matrix3d base_cov_ = Eigen::Matrix3d::Zero();                ///< kGraph: the base's marginal
+  /// kGraph: [base, landmark] joint marginals (5 x 5) since the last join, per global landmark.
+  mutable std::unordered_map<int, Eigen::Matrix<double, 5, 5>> joint_;
+  /// kGraph: each landmark's marginal when last computed, in the global frame: a bound on today's
+  /// (information only grows), for the view's gate.
+  std::vector<Eigen::Matrix2d> own_cov_;
+  GraphSolve last_solve_;
   JoinOptions opt_;
   Eigen::VectorXd x_;  ///< [base pose (3), landmarks (2 each)]
-  Eigen::MatrixXd P_;
+  Eigen::MatrixXd P_;  ///< dense: its covariance (kGraph: empty)
   std::vector<FeatureId> first_id_;
   std::vector<double> exist_;  ///< per landmark: its log-odds of existence
   int maps_ = 0;
