@@ -1,15 +1,20 @@
-// The host's global map as it grows (docs/submaps.md, "How the host's join scales"): a chain of
-// generated local maps along a corridor, each with `--map-landmarks` landmarks of which `--overlap`
-// are the previous map's last ones seen again (found by the join's association, not by their ids),
-// joined one after the other until the global map holds `--max-landmarks`. Per size bin of the
-// global map: the join's median time as a ratio to the first bin's (measured in the same run: timing
-// is reported, never asserted), what was fused and kept apart, and the global covariance's memory.
+// The host's global map as it grows (docs/submaps.md, "How the host's join scales"; docs/mapping.md):
+// a chain of generated local maps along a corridor, each with `--map-landmarks` landmarks of which
+// `--overlap` are the previous map's last ones seen again (found by the join's association, not by
+// their ids), joined one after the other until the global map holds `--max-landmarks`, dense or on
+// the solver (`--solver`). Per size bin of the global map: the join's median and 95th percentile
+// and their ratio to the first bin's median (measured in the same run: timing is reported, never
+// asserted), a joint-marginal query's (the base and the 100 landmarks nearest it), what was fused
+// and kept apart, and the process's peak resident memory at the bin's end.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <vector>
+
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Dense>
@@ -31,7 +36,15 @@ struct Options {
   int overlap = 12;
   double sigma_m = 0.1;
   unsigned seed = 1;
+  JoinOptions::Solver solver = JoinOptions::Solver::kDense;
 };
+
+/// The process's peak resident memory so far [MB].
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
 
 /// Map k of the chain: its frame begins at the world's (k L, 0) heading along x and it ends at (L, 0,
 /// 0) in it. `world` are the landmarks it sees (world frame), each measured with independent noise.
@@ -56,21 +69,42 @@ Submap make_map(int k, double L, const std::vector<Eigen::Vector2d>& world, Feat
   return m;
 }
 
-double median(std::vector<double> v) {
+/// The q-quantile (nearest rank) of v.
+double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
+  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::min(v.size() - 1, k == 0 ? 0 : k - 1)];
+}
+
+/// The time of a joint-marginal query: the base and the 100 landmarks nearest it [ms].
+double query_ms(const GlobalMap& g) {
+  std::vector<std::pair<double, int>> near;
+  const Eigen::Vector2d base = g.state().head<2>();
+  for (int k = 0; k < g.landmarks(); ++k) near.emplace_back((g.landmark(k) - base).norm(), k);
+  const auto n = std::min<std::size_t>(100, near.size());
+  std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(n), near.end());
+  std::vector<int> gs;
+  for (std::size_t k = 0; k < n; ++k) gs.push_back(near[k].second);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Eigen::MatrixXd S = g.joint_marginal(gs);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (S.rows() != 3 + 2 * static_cast<Eigen::Index>(n)) throw std::runtime_error("joint_marginal: wrong size");
+  return ms;
 }
 
 int run(int argc, char** argv) {
   CLI::App app{"the host's join as the global map grows (timing is measured, never asserted)"};
   Options o;
   app.add_option("--max-landmarks", o.max_landmarks, "stop when the global map holds this many")
-      ->check(CLI::Range(100, 20000));
+      ->check(CLI::Range(100, 200000));
   app.add_option("--map-landmarks", o.map_landmarks, "landmarks per local map")->check(CLI::Range(8, 128));
   app.add_option("--overlap", o.overlap, "of those, the previous map's last ones seen again")->check(CLI::Range(0, 64));
   app.add_option("--sigma", o.sigma_m, "landmark noise [m]")->check(CLI::Range(0.001, 1.0));
   app.add_option("--seed", o.seed, "random seed");
+  app.add_option("--solver", o.solver, "the global map: dense (the EKF-style join) or graph (factors on Ceres)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, JoinOptions::Solver>{
+          {"dense", JoinOptions::Solver::kDense}, {"graph", JoinOptions::Solver::kGraph}}));
   CLI11_PARSE(app, argc, argv);
   if (o.overlap >= o.map_landmarks) throw std::runtime_error("--overlap must be below --map-landmarks");
 
@@ -78,16 +112,19 @@ int run(int argc, char** argv) {
   const int fresh = o.map_landmarks - o.overlap;
   const double L = fresh * 0.5;  // 20 m wide corridor, one landmark per 10 m^2
   std::uniform_real_distribution<double> ux(0.0, L), uy(-10.0, 10.0);
-  GlobalMap g{JoinOptions{}};
+  JoinOptions jo;
+  jo.solver = o.solver;
+  GlobalMap g{jo};
   FeatureId next_id = 0;
   std::vector<Eigen::Vector2d> previous;
   struct Bin {
     int upto;
-    std::vector<double> ms;
+    std::vector<double> ms, query_ms;
     int joins = 0, fused = 0, expected = 0, declined = 0, refused = 0;
+    double rss_mb = 0;
   };
   std::vector<Bin> bins;
-  for (int b = 100; b <= o.max_landmarks * 2; b *= 2) bins.push_back(Bin{b, {}, 0, 0, 0, 0, 0});
+  for (int b = 100; b <= o.max_landmarks * 2; b *= 2) bins.push_back(Bin{b, {}, {}, 0, 0, 0, 0, 0, 0});
   for (int k = 0; g.landmarks() < o.max_landmarks; ++k) {
     std::vector<Eigen::Vector2d> world(previous.end() - std::min<std::ptrdiff_t>(o.overlap, previous.size()),
                                        previous.end());
@@ -111,15 +148,17 @@ int run(int argc, char** argv) {
       bin->expected += seen_again;
       bin->declined += j.declined + j.pruned;
       bin->refused += j.refused ? 1 : 0;
+      bin->query_ms.push_back(query_ms(g));
+      bin->rss_mb = peak_rss_mb();
     }
     previous = std::move(world);
   }
-  std::printf("# the host's join as the global map grows: %d-landmark local maps, %d seen again per map\n\n",
-              o.map_landmarks, o.overlap);
+  std::printf("# the host's join as the global map grows (%s): %d-landmark local maps, %d seen again per map\n\n",
+              o.solver == JoinOptions::Solver::kGraph ? "graph" : "dense", o.map_landmarks, o.overlap);
   std::printf(
-      "| global landmarks before the join | joins | median join [ms] | ratio to the first bin | fused / seen again "
-      "| declined or pruned | refused | global covariance at the bin's top [MB] |\n| --- | --- | --- | --- | --- | --- "
-      "| --- | --- |\n");
+      "| global landmarks before the join | joins | join median [ms] | join p95 [ms] | median / first bin's | "
+      "query median [ms] | query p95 [ms] | fused / seen again | declined or pruned | refused | peak resident [MB] "
+      "|\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   double base = 0;
   int lo = 0;
   for (const Bin& b : bins) {
@@ -127,11 +166,12 @@ int run(int argc, char** argv) {
       lo = b.upto;
       continue;
     }
-    const double med = median(b.ms);
+    const double med = quantile(b.ms, 0.5);
     if (base == 0) base = med;
-    const double dim = 3.0 + 2.0 * b.upto;
-    std::printf("| %d-%d | %d | %.2f | %.1f | %d / %d | %d | %d | %.1f |\n", lo, b.upto - 1, b.joins, med, med / base,
-                b.fused, b.expected, b.declined, b.refused, dim * dim * 8 / 1e6);
+    std::printf("| %d-%d | %d | %.2f | %.2f | %.1f | %.2f | %.2f | %d / %d | %d | %d | %.0f |\n", lo, b.upto - 1,
+                b.joins, med, quantile(b.ms, 0.95), med / base, quantile(b.query_ms, 0.5), quantile(b.query_ms, 0.95),
+                b.fused, b.expected, b.declined, b.refused, b.rss_mb);
+    std::fflush(stdout);
     lo = b.upto;
   }
   return 0;

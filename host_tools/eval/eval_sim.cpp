@@ -6,11 +6,13 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -18,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "geojcbb_host/batch.hpp"
 #include "geojcbb_host/eval_cli.hpp"
 #include "geojcbb_host/eval_report.hpp"
 #include "geojcbb_host/report.hpp"
@@ -73,7 +76,65 @@ struct SimOptions {
   std::uint64_t world_seed = 1000;
   std::string family;                     ///< empty: the families in turn
   std::vector<std::string> world_family;  ///< per scenario: its family ("" for a --scenario file)
+  bool batch = false;                     ///< --batch: the batch reference beside each run (host_tools/mapping)
 };
+
+// The batch reference per run (--batch): the mean position error of the run's trace at its scans
+// (the filter's, or with local maps on the solver the joined map's smoothed one) and of every pose
+// and landmark solved at once (batch.hpp) with the run's own pairings (with local maps: the ids the
+// local maps gave, not the joins' fusions, so a loop closed between maps is not closed there) and
+// with the labels (the true association), from the run's trace.
+struct BatchRow {
+  bool have = false;
+  double filter_m = 0, batch_m = 0, labels_m = 0;  ///< labels_m: the batch with the labels' pairings
+};
+
+BatchRow batch_row(RunSource& src, const BatchRecorder& rec, const RunResult& r, const RunOptions& ro) {
+  const StepSettings<double> ss = step_settings(ro, src.sensor);
+  const Mount<double> mount{ss.sensor_x_m, ss.sensor_y_m, ss.sensor_theta_rad};
+  const BatchProblem p = batch_problem(src, rec, r.trace, mount, false);
+  const BatchProblem q = batch_problem(src, rec, r.trace, mount, true);
+  return {true, mean_position_error(p, p.initial), mean_position_error(p, solve_batch(p, BatchOptions{}).poses),
+          mean_position_error(q, solve_batch(q, BatchOptions{}).poses)};
+}
+
+// The batch table: per scenario (a world's family) and strategy, the medians over its runs.
+void print_batch_table(const std::vector<Scenario>& scenarios, const std::vector<std::string>& family,
+                       const std::vector<Method>& strategies, const std::vector<std::array<int, 3>>& job_of,
+                       const std::vector<BatchRow>& rows, const std::string& out_dir) {
+  std::map<std::pair<std::string, int>, std::vector<std::size_t>> groups;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    if (!rows[j].have) continue;
+    const auto sc = static_cast<std::size_t>(job_of[j][0]);
+    groups[{family[sc].empty() ? scenarios[sc].name : family[sc], job_of[j][1]}].push_back(j);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? NAN : v[v.size() / 2];
+  };
+  std::printf(
+      "\n== the batch reference (every pose and landmark solved at once with each run's own pairings; "
+      "docs/mapping.md)\n| scenario | strategy | runs | trace's mean position error, median [m] | batch's, median "
+      "[m] | labels' batch, median [m] | trace / labels' batch (median of the runs' ratios) |\n| --- | --- | --- | --- "
+      "| --- | --- | --- |\n");
+  std::ofstream csv(out_dir + "/batch.csv");
+  csv << "scenario,strategy,run,trace_position_error_m,batch_position_error_m,labels_batch_position_error_m\n";
+  for (const auto& [key, js] : groups) {
+    std::vector<double> f, b, l, ratio;
+    for (std::size_t j : js) {
+      f.push_back(rows[j].filter_m);
+      b.push_back(rows[j].batch_m);
+      l.push_back(rows[j].labels_m);
+      ratio.push_back(rows[j].filter_m / rows[j].labels_m);
+      csv << csv_escape(key.first) << ',' << strategies[static_cast<std::size_t>(key.second)].name() << ','
+          << job_of[j][2] << ',' << rows[j].filter_m << ',' << rows[j].batch_m << ',' << rows[j].labels_m << '\n';
+    }
+    std::printf("| %s | %s | %zu | %.2f | %.2f | %.2f | %.2f |\n", key.first.c_str(),
+                strategies[static_cast<std::size_t>(key.second)].name().c_str(), js.size(), median(f), median(b),
+                median(l), median(ratio));
+  }
+  if (!csv) throw std::runtime_error("cannot write " + out_dir + "/batch.csv");
+}
 
 // The first run of each (scenario, strategy): what the worlds' table compares.
 struct FirstRun {
@@ -180,10 +241,19 @@ int run_sim(const SimOptions& o) {
   const int threads = o.runner           ? 1  // one device, one run at a time
                       : o.flags.jobs > 0 ? o.flags.jobs
                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (o.batch && o.runner) throw std::runtime_error("--batch: in process only (a device does not report its pairings)");
+  std::vector<BatchRow> batch_rows(jobs.size());
+  std::vector<std::array<int, 3>> job_of(jobs.size());
+  for (std::size_t j = 0; j < jobs.size(); ++j) job_of[j] = {jobs[j].sc, jobs[j].st, jobs[j].run};
   const double wall_s = run_parallel(jobs.size(), threads, o.flags.progress, [&](std::size_t j) {
     const Job& jb = jobs[j];
     RunOptions ro = o.run;
     strategies[jb.st].apply(ro);
+    BatchRecorder rec;
+    if (o.batch) {
+      ro.record_trace = true;
+      ro.on_scan = [&rec](const ScanOutcome& sc) { rec.on_scan(sc); };
+    }
     const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(jb.run);
     const auto a = std::chrono::steady_clock::now();
     RunResult r;
@@ -191,6 +261,7 @@ int run_sim(const SimOptions& o) {
     try {
       SimSource src(scenarios[jb.sc], seed, ro.max_steps);
       r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
+      if (o.batch) batch_rows[j] = batch_row(src, rec, r, ro);
     } catch (const std::exception& e) {
       err = e.what();
     }
@@ -327,6 +398,7 @@ int run_sim(const SimOptions& o) {
     report_world_strategies(o, strategies, cells);
     report_worlds(o, strategies, first);
   }
+  if (o.batch) print_batch_table(scenarios, o.world_family, strategies, job_of, batch_rows, o.flags.out_dir);
   std::printf(
       "\n%zu runs in %.1f s on %d threads; per-run rows: %s/runs.csv, "
       "summary: %s/summary.json\n",
@@ -356,6 +428,9 @@ Subcommand add_sim_command(CLI::App& app) {
                   "non-inferiority table (worlds.csv; docs/simulator.md). Families, taken in turn:" +
                       families)
       ->check(CLI::Range(0, 100000));
+  sim->add_flag("--batch", o->batch,
+                "the batch reference: each run's poses and landmarks solved at once (Ceres) with its own pairings, "
+                "its mean position error beside the run's trace's (batch.csv; docs/mapping.md)");
   sim->add_option("--world-seed", o->world_seed, "seed of the first world (world k: seed + k)")->default_val(1000);
   sim->add_option("--family", o->family, "draw every world from this family");
   add_common_flags(*sim, o->flags, kAllCommonFlags, "runs.csv, summary.json and the SVG figures", "run");

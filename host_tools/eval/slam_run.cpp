@@ -49,6 +49,15 @@ struct SlamSession::State {
   double radius_m = 0;        // r + d
   double last_t = 0;          // the last scan's time
   std::vector<std::pair<int, Pose2<double>>> local_trace;  // per trace point: its local map and pose there
+  struct LocalStep {
+    int map;
+    Pose2<double> pose;
+    Eigen::Matrix3d P;
+  };
+  std::vector<LocalStep> local_steps;  // per scored step: its local map, the pose and covariance there
+  /// kGraph: the scored steps' estimates again through their maps' origins as solved at the end
+  /// (the joined map's smoothed trajectory), with the origins' marginal covariances.
+  void smooth_steps(RunResult& res) const;
   /// The pose and its covariance in the world: the local map's, through the global map's base.
   void world_pose(Pose2<double>& x, Eigen::Matrix3d& P) const {
     const ekf::Slam<double, EB>& slam = step.slam();
@@ -405,6 +414,12 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   Eigen::Matrix3d P;
   s.world_pose(x, P);
   sc.pose(t_s, *truth, x, P);
+  if (s.global) {
+    Eigen::Matrix3d Pl;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) Pl(a, b) = s.step.slam().cov(a, b);
+    s.local_steps.push_back({s.global->maps(), s.step.slam().pose(), Pl});
+  }
   res.steps.back().lost = reloc.state == node::Localisation::kLost;
   res.steps.back().declared_found = reloc.found;
   int paired = 0;
@@ -421,6 +436,37 @@ void SlamSession::scan(std::vector<SimObservation> scan, double t_s, const Pose2
   if (s.global && r.submap_due) s.hand_over();
 }
 
+void SlamSession::State::smooth_steps(RunResult& res) const {
+  if (global->graph() == nullptr || local_steps.size() != res.steps.size() || res.steps.empty()) return;
+  std::vector<Eigen::Vector3d> o;
+  std::vector<Eigen::Matrix3d> Po;
+  global->origins(o, Po);
+  res.mean_abs_x_m = res.mean_abs_y_m = 0;
+  for (std::size_t k = 0; k < res.steps.size(); ++k) {
+    StepRecord& r = res.steps[k];
+    const LocalStep& l = local_steps[k];
+    const auto m = static_cast<std::size_t>(l.map);
+    const double th = o[m](2), c = std::cos(th), sn = std::sin(th);
+    r.estimate = {o[m](0) + c * l.pose.x - sn * l.pose.y, o[m](1) + sn * l.pose.x + c * l.pose.y,
+                  wrap_angle(th + l.pose.theta)};
+    Eigen::Matrix3d Jb = Eigen::Matrix3d::Identity(), Jl = Eigen::Matrix3d::Identity();
+    Jb(0, 2) = -sn * l.pose.x - c * l.pose.y;
+    Jb(1, 2) = c * l.pose.x - sn * l.pose.y;
+    Jl.topLeftCorner<2, 2>() << c, -sn, sn, c;
+    const Eigen::Matrix3d P = Jb * Po[m] * Jb.transpose() + Jl * l.P * Jl.transpose();
+    r.var_x = P(0, 0);
+    r.var_y = P(1, 1);
+    r.var_theta = P(2, 2);
+    const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
+                            wrap_angle(r.estimate.theta - r.truth.theta));
+    r.pose_nees = e.dot(P.ldlt().solve(e));
+    res.mean_abs_x_m += std::abs(e.x());
+    res.mean_abs_y_m += std::abs(e.y());
+  }
+  res.mean_abs_x_m /= static_cast<double>(res.steps.size());
+  res.mean_abs_y_m /= static_cast<double>(res.steps.size());
+}
+
 void SlamSession::trace(double t, std::vector<TracePoint>& trace) {
   State& s = *st_;
   trace.push_back({t, pose()});
@@ -429,10 +475,15 @@ void SlamSession::trace(double t, std::vector<TracePoint>& trace) {
 
 void SlamSession::smoothed(std::vector<TracePoint>& trace) const {
   const State& s = *st_;
-  if (!s.global || s.local_trace.size() != trace.size()) return;
+  if (s.global) smooth_trace(*s.global, s.local_trace, trace);
+}
+
+void smooth_trace(const GlobalMap& global, const std::vector<std::pair<int, Pose2<double>>>& local,
+                  std::vector<TracePoint>& trace) {
+  if (global.graph() == nullptr || local.size() != trace.size()) return;
   for (std::size_t k = 0; k < trace.size(); ++k) {
-    const Eigen::Vector3d o = s.global->origin(s.local_trace[k].first);
-    const Pose2<double>& l = s.local_trace[k].second;
+    const Eigen::Vector3d o = global.origin(local[k].first);
+    const Pose2<double>& l = local[k].second;
     const double c = std::cos(o(2)), sn = std::sin(o(2));
     trace[k].pose = {o(0) + c * l.x - sn * l.y, o(1) + sn * l.x + c * l.y, wrap_angle(o(2) + l.theta)};
   }
@@ -444,6 +495,7 @@ RunResult SlamSession::finish() {
     s.hand_over();
     RunResult res = s.scorer->finish();
     take_global_map(res, *s.global, s.id_truth);
+    s.smooth_steps(res);
     return res;
   }
   RunResult res = s.scorer->finish();

@@ -231,6 +231,9 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   double last_t = 0;            // the last answered scan's time (a join's)
   std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
   Pose2<double> last_pose = src.x0;
+  // With local maps: each trace point's local map and its pose there (smooth_trace), the last one.
+  std::vector<std::pair<int, Pose2<double>>> local_trace;
+  Pose2<double> local_last = src.x0;  // the first map's frame is the world's
   // The seed (SUBMAP_SEED before each batch) around where the robot was at the last reply (the
   // world's frame), less the global landmarks the local map holds (`held`, as in process: the filter's
   // ids). The replies say what it holds: the landmarks carried into it (SUBMAP's flags), the seeds it
@@ -247,6 +250,8 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     for (const RunInput& in : ins) {
       last_pose = moved(last_pose, in);
       res.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose});
+      local_last = moved(local_last, in);
+      if (global) local_trace.emplace_back(global->maps(), local_last);
     }
   };
   auto hand_over = [&]() {
@@ -330,6 +335,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     Eigen::Matrix3d P;
     P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
     Pose2<double> x{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
+    const Pose2<double> x_local = x;
     if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
     here = Eigen::Vector2d(x.x, x.y);
     held_known = held_known && r.pose.removed == r.pose.count;
@@ -340,13 +346,16 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
     if (o.record_trace) {
       trace_moves(f.moves);
       res.trace.push_back({f.t_s, x});
+      if (global) local_trace.emplace_back(global->maps(), x_local);
     }
+    local_last = x_local;
     last_pose = x;
     res.landmarks = r.pose.landmark_count;
     last_t = f.t_s;
     if (r.pose.submap_frames > 0) {  // before the hook, which may ask for STATS
       if (!global) throw LinkError("the device handed over a local map, but this run has no submap rule");
       hand_over();
+      local_last = Pose2<double>{0, 0, 0};  // the next map begins here
     }
     if (so.hook) so.hook(f.batch, r);
     flight.pop_front();
@@ -403,6 +412,7 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
   if (!global) return scorer.finish();
   RunResult out = scorer.finish();
   take_global_map(out, *global, id_truth);
+  smooth_trace(*global, local_trace, out.trace);
   return out;
 }
 

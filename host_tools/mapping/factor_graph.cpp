@@ -121,7 +121,9 @@ void FactorGraph::add_map(const MapFactor& f) {
   std::vector<double*> blocks = {frame_block(f.from), frame_block(f.to)};
   for (int j : f.landmarks) blocks.push_back(landmark_block(j));
   ceres::LossFunction* loss = f.loss_d2 > 0 ? new ceres::HuberLoss(std::sqrt(f.loss_d2)) : nullptr;
-  problem_->AddResidualBlock(new MapCost(f), loss, blocks);
+  auto* cost = new MapCost(f);
+  problem_->AddResidualBlock(cost, loss, blocks);
+  factor_list_.push_back({cost, f.from, f.to, f.landmarks, f.loss_d2});
   ++factors_;
 }
 
@@ -165,23 +167,54 @@ Eigen::MatrixXd FactorGraph::marginal(const std::vector<int>& fs, const std::vec
   const int q = static_cast<int>(want.size());
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(q, q);
   if (n == 0) return out;
-  // J at the estimate (the robustified one, as the solver sees it), and the information J^T J.
-  ceres::Problem::EvaluateOptions eo;
-  for (int k = 1; k < nf; ++k) eo.parameter_blocks.push_back(frames_[static_cast<std::size_t>(k)]->x);
-  for (int j = 0; j < nl; ++j) eo.parameter_blocks.push_back(landmarks_[static_cast<std::size_t>(j)]->x);
-  ceres::CRSMatrix crs;
-  if (!problem_->Evaluate(eo, nullptr, nullptr, nullptr, &crs)) throw std::runtime_error("marginal: evaluation failed");
-  Eigen::SparseMatrix<double, Eigen::RowMajor> J(crs.num_rows, crs.num_cols);
-  {
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(crs.values.size());
-    for (int r = 0; r < crs.num_rows; ++r) {
-      for (int k = crs.rows[static_cast<std::size_t>(r)]; k < crs.rows[static_cast<std::size_t>(r) + 1]; ++k)
-        t.emplace_back(r, crs.cols[static_cast<std::size_t>(k)], crs.values[static_cast<std::size_t>(k)]);
+  // The information J^T J at the estimate, factor by factor (each one's Jacobian is dense over its
+  // variables): with Huber's loss beyond its threshold, J scaled by sqrt(rho'(s)), as Ceres' corrector
+  // does where rho'' < 0 (the robustified Jacobian the solver and ceres::Covariance see).
+  std::vector<Eigen::Triplet<double>> info;
+  std::size_t entries = 0;
+  for (const Factor& f : factor_list_)
+    entries += static_cast<std::size_t>((6 + 2 * f.landmarks.size()) * (6 + 2 * f.landmarks.size()));
+  info.reserve(entries);
+  for (const Factor& f : factor_list_) {
+    std::vector<const double*> params = {frames_[static_cast<std::size_t>(f.from)]->x,
+                                         frames_[static_cast<std::size_t>(f.to)]->x};
+    std::vector<int> col = {f.from == 0 ? -1 : frame_col(f.from), f.to == 0 ? -1 : frame_col(f.to)};
+    std::vector<int> size = {3, 3};
+    for (int j : f.landmarks) {
+      params.push_back(landmarks_[static_cast<std::size_t>(j)]->x);
+      col.push_back(landmark_col(j));
+      size.push_back(2);
     }
-    J.setFromTriplets(t.begin(), t.end());
+    const int r = f.cost->num_residuals(), d = 3 + 3 + 2 * static_cast<int>(f.landmarks.size());
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    std::vector<RowMajor> blocks(params.size());
+    std::vector<double*> jac(params.size());
+    for (std::size_t b = 0; b < params.size(); ++b) {
+      blocks[b].resize(r, size[b]);
+      jac[b] = blocks[b].data();
+    }
+    Eigen::VectorXd res(r);
+    if (!f.cost->Evaluate(params.data(), res.data(), jac.data()))
+      throw std::runtime_error("marginal: evaluation failed");
+    Eigen::MatrixXd J(r, d);
+    std::vector<int> at;  // J's column -> the information's (-1: the fixed frame)
+    for (std::size_t b = 0, c = 0; b < params.size(); c += static_cast<std::size_t>(size[b]), ++b) {
+      J.middleCols(static_cast<Eigen::Index>(c), size[b]) = blocks[b];
+      for (int a = 0; a < size[b]; ++a) at.push_back(col[b] < 0 ? -1 : col[b] + a);
+    }
+    const double s2 = res.squaredNorm();
+    if (f.loss_d2 > 0 && s2 > f.loss_d2) J *= std::sqrt(std::sqrt(f.loss_d2 / s2));  // rho'(s) = sqrt(a^2 / s)
+    const Eigen::MatrixXd H = J.transpose() * J;
+    for (int a = 0; a < d; ++a) {
+      for (int b = 0; b < d; ++b) {
+        if (at[static_cast<std::size_t>(a)] >= 0 && at[static_cast<std::size_t>(b)] >= 0)
+          info.emplace_back(at[static_cast<std::size_t>(a)], at[static_cast<std::size_t>(b)], H(a, b));
+      }
+    }
   }
-  const Eigen::SparseMatrix<double> A = Eigen::SparseMatrix<double>(J.transpose()) * J;
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(info.begin(), info.end());
+  info = {};
   // The elimination order: the minimum-degree order of the others, then the query's variables.
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> amd;
   Eigen::AMDOrdering<int>()(A, amd);

@@ -130,6 +130,16 @@ Eigen::MatrixXd GlobalMap::landmarks_covariance() const {
   return graph_->marginal({}, var_of_);
 }
 
+Eigen::MatrixXd GlobalMap::joint_marginal(const std::vector<int>& gs) const {
+  std::vector<int> rows = {0, 1, 2}, vars;
+  for (int g : gs) {
+    rows.push_back(3 + 2 * g);
+    rows.push_back(4 + 2 * g);
+    if (graph_) vars.push_back(var_of_.at(static_cast<std::size_t>(g)));
+  }
+  return graph_ ? graph_->marginal({base_frame_}, vars) : Eigen::MatrixXd(P_(rows, rows));
+}
+
 void GlobalMap::cache_joint(const std::vector<int>& gs) const {
   std::vector<int> need, vars;
   for (int g : gs) {
@@ -455,7 +465,24 @@ JoinResult GlobalMap::join(const Submap& m) {
   ++maps_;
   frame_of_map_.push_back(base_frame_);
   origins_.emplace_back(x_.head<3>());
+  origin_cov_.push_back(base_covariance());
   return res;
+}
+
+void GlobalMap::origins(std::vector<Eigen::Vector3d>& o, std::vector<Eigen::Matrix3d>& P) const {
+  o.clear();
+  P.clear();
+  if (!graph_) {
+    o = origins_;
+    P = origin_cov_;
+    return;
+  }
+  const Eigen::MatrixXd S = graph_->marginal(frame_of_map_, {});
+  for (std::size_t k = 0; k < frame_of_map_.size(); ++k) {
+    const auto r = 3 * static_cast<Eigen::Index>(k);
+    o.push_back(graph_->frame(frame_of_map_[k]));
+    P.emplace_back(S.block<3, 3>(r, r));
+  }
 }
 
 Eigen::Vector3d GlobalMap::origin(int k) const {

@@ -93,6 +93,11 @@ void record_join(SubmapStats& st, const JoinResult& joined, const GlobalMap& glo
 /// The run's map is the global one: its landmarks with their truths (id_truth[first id], unknown when
 /// out of range), the spurious count, landmarks and map_cov.
 void take_global_map(RunResult& res, const GlobalMap& global, const std::vector<int>& id_truth);
+/// A trace's poses composed again with their local maps' origins as the global map holds them now
+/// (`local`: per trace point, its local map and the pose in that map's frame); nothing changes unless
+/// the global map is a factor graph (dense: the origins are never revisited).
+void smooth_trace(const GlobalMap& global, const std::vector<std::pair<int, Pose2<double>>>& local,
+                  std::vector<TracePoint>& trace);
 
 /// A row of the evaluation: a strategy, or the ground-truth association ("TRUTH").
 /// Pieces switched into a preset are suffixes after "+": V the verification (e.g. "JCBB+V"), R

@@ -12,8 +12,9 @@
 #include <vector>
 
 namespace ceres {
+class CostFunction;
 class Problem;
-}
+}  // namespace ceres
 
 namespace geojcbb::host {
 
@@ -84,6 +85,14 @@ class FactorGraph {
   std::vector<std::unique_ptr<Frame>> frames_;  // stable addresses: the solver holds them
   std::vector<std::unique_ptr<Landmark>> landmarks_;
   std::unique_ptr<ceres::Problem> problem_;
+  /// Each factor's cost (owned by the problem), its variables and its loss (for the information).
+  struct Factor {
+    const ceres::CostFunction* cost;
+    int from, to;
+    std::vector<int> landmarks;
+    double loss_d2;
+  };
+  std::vector<Factor> factor_list_;
   int factors_ = 0;
 };
 

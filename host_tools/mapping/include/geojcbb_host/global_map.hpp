@@ -151,6 +151,9 @@ class GlobalMap {
   Eigen::Matrix2d landmark_covariance(int k) const;
   /// The base's (the current local map's origin) marginal covariance.
   Eigen::Matrix3d base_covariance() const;
+  /// The joint covariance of the base and landmarks `gs` (3 + 2 rows each): dense, read from the
+  /// state's; kGraph, recovered from a factorisation with them eliminated last.
+  Eigen::MatrixXd joint_marginal(const std::vector<int>& gs) const;
   /// Every landmark's joint covariance (2 rows each, in their order): dense, O(landmarks^2).
   Eigen::MatrixXd landmarks_covariance() const;
   /// Global landmark k's log-odds of existence: the last local map's that held it (which began from
@@ -163,6 +166,9 @@ class GlobalMap {
   /// The origin of local map k (k <= maps(): maps() is the one being built) in the world: dense, as
   /// it was when the map began (never revisited); kGraph, the solution's (relinearised since).
   Eigen::Vector3d origin(int k) const;
+  /// Every local map's origin (0..maps()) and its marginal covariance (dense: as it was when the map
+  /// began; kGraph: the solution's, from one factorisation).
+  void origins(std::vector<Eigen::Vector3d>& o, std::vector<Eigen::Matrix3d>& P) const;
   /// The local ids the last joined map kept into the next one (its Submap::carried): what the next
   /// map begins with.
   const std::vector<FeatureId>& carried_ids() const { return carried_ids_; }
@@ -234,8 +240,9 @@ class GlobalMap {
   std::vector<int> var_of_;                                           ///< kGraph: global landmark -> its graph variable
   std::vector<int> frame_of_map_ = {0};                               ///< kGraph: local map k's origin's frame
   std::vector<Eigen::Vector3d> origins_ = {Eigen::Vector3d::Zero()};  ///< dense: each map's origin as it began
-  int base_frame_ = 0;                                                ///< kGraph: the base's frame
-  Eigen::Matrix3d base_cov_ = Eigen::Matrix3d::Zero();                ///< kGraph: the base's marginal
+  std::vector<Eigen::Matrix3d> origin_cov_ = {Eigen::Matrix3d::Zero()};  ///< dense: and its covariance then
+  int base_frame_ = 0;                                                   ///< kGraph: the base's frame
+  Eigen::Matrix3d base_cov_ = Eigen::Matrix3d::Zero();                   ///< kGraph: the base's marginal
   /// kGraph: [base, landmark] joint marginals (5 x 5) since the last join, per global landmark.
   mutable std::unordered_map<int, Eigen::Matrix<double, 5, 5>> joint_;
   /// kGraph: each landmark's marginal when last computed, in the global frame: a bound on today's
