@@ -80,6 +80,7 @@ double quantile(std::vector<double> v, double q) {
 /// The time of a joint-marginal query: the base and the 100 landmarks nearest it [ms].
 double query_ms(const GlobalMap& g) {
   std::vector<std::pair<double, int>> near;
+  near.reserve(static_cast<std::size_t>(g.landmarks()));
   const Eigen::Vector2d base = g.state().head<2>();
   for (int k = 0; k < g.landmarks(); ++k) near.emplace_back((g.landmark(k) - base).norm(), k);
   const auto n = std::min<std::size_t>(100, near.size());

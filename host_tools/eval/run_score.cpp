@@ -86,17 +86,21 @@ void RunScorer::handed_over(FeatureId id) {
   feature_truth_[static_cast<std::size_t>(id)] = kRemoved;
 }
 
+Eigen::Vector3d StepRecord::set_estimate(const Pose2<double>& x, const Eigen::Matrix3d& P) {
+  estimate = x;
+  var_x = P(0, 0);
+  var_y = P(1, 1);
+  var_theta = P(2, 2);
+  Eigen::Vector3d e(estimate.x - truth.x, estimate.y - truth.y, wrap_angle(estimate.theta - truth.theta));
+  pose_nees = e.dot(P.ldlt().solve(e));
+  return e;
+}
+
 void RunScorer::pose(double t_s, const Pose2<double>& truth, const Pose2<double>& estimate, const Eigen::Matrix3d& P) {
   StepRecord r;
   r.t_s = t_s;
   r.truth = truth;
-  r.estimate = estimate;
-  r.var_x = P(0, 0);
-  r.var_y = P(1, 1);
-  r.var_theta = P(2, 2);
-  const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
-                          wrap_angle(r.estimate.theta - r.truth.theta));
-  r.pose_nees = e.dot(P.ldlt().solve(e));
+  const Eigen::Vector3d e = r.set_estimate(estimate, P);
   res_.mean_abs_x_m += std::abs(e.x());
   res_.mean_abs_y_m += std::abs(e.y());
   res_.steps.push_back(r);

@@ -446,20 +446,10 @@ void SlamSession::State::smooth_steps(RunResult& res) const {
     StepRecord& r = res.steps[k];
     const LocalStep& l = local_steps[k];
     const auto m = static_cast<std::size_t>(l.map);
-    const double th = o[m](2), c = std::cos(th), sn = std::sin(th);
-    r.estimate = {o[m](0) + c * l.pose.x - sn * l.pose.y, o[m](1) + sn * l.pose.x + c * l.pose.y,
-                  wrap_angle(th + l.pose.theta)};
-    Eigen::Matrix3d Jb = Eigen::Matrix3d::Identity(), Jl = Eigen::Matrix3d::Identity();
-    Jb(0, 2) = -sn * l.pose.x - c * l.pose.y;
-    Jb(1, 2) = c * l.pose.x - sn * l.pose.y;
-    Jl.topLeftCorner<2, 2>() << c, -sn, sn, c;
-    const Eigen::Matrix3d P = Jb * Po[m] * Jb.transpose() + Jl * l.P * Jl.transpose();
-    r.var_x = P(0, 0);
-    r.var_y = P(1, 1);
-    r.var_theta = P(2, 2);
-    const Eigen::Vector3d e(r.estimate.x - r.truth.x, r.estimate.y - r.truth.y,
-                            wrap_angle(r.estimate.theta - r.truth.theta));
-    r.pose_nees = e.dot(P.ldlt().solve(e));
+    Pose2<double> x;
+    Eigen::Matrix3d P;
+    compose(o[m], Po[m], l.pose, l.P, x, P);
+    const Eigen::Vector3d e = r.set_estimate(x, P);
     res.mean_abs_x_m += std::abs(e.x());
     res.mean_abs_y_m += std::abs(e.y());
   }
@@ -481,12 +471,10 @@ void SlamSession::smoothed(std::vector<TracePoint>& trace) const {
 void smooth_trace(const GlobalMap& global, const std::vector<std::pair<int, Pose2<double>>>& local,
                   std::vector<TracePoint>& trace) {
   if (global.graph() == nullptr || local.size() != trace.size()) return;
-  for (std::size_t k = 0; k < trace.size(); ++k) {
-    const Eigen::Vector3d o = global.origin(local[k].first);
-    const Pose2<double>& l = local[k].second;
-    const double c = std::cos(o(2)), sn = std::sin(o(2));
-    trace[k].pose = {o(0) + c * l.x - sn * l.y, o(1) + sn * l.x + c * l.y, wrap_angle(o(2) + l.theta)};
-  }
+  const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d P;
+  for (std::size_t k = 0; k < trace.size(); ++k)
+    compose(global.origin(local[k].first), zero, local[k].second, zero, trace[k].pose, P);
 }
 
 RunResult SlamSession::finish() {

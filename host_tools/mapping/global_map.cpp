@@ -160,18 +160,23 @@ void GlobalMap::cache_joint(const std::vector<int>& gs) const {
   }
 }
 
-void GlobalMap::to_global(const Pose2<double>& local, const Eigen::Matrix3d& P_local, Pose2<double>& global,
-                          Eigen::Matrix3d& P_global) const {
-  const double th = x_(2), c = std::cos(th), s = std::sin(th);
-  global.x = x_(0) + c * local.x - s * local.y;
-  global.y = x_(1) + s * local.x + c * local.y;
+void compose(const Eigen::Vector3d& o, const Eigen::Matrix3d& P_o, const Pose2<double>& local,
+             const Eigen::Matrix3d& P_local, Pose2<double>& global, Eigen::Matrix3d& P_global) {
+  const double th = o(2), c = std::cos(th), s = std::sin(th);
+  global.x = o(0) + c * local.x - s * local.y;
+  global.y = o(1) + s * local.x + c * local.y;
   global.theta = wrap_angle(th + local.theta);
   Eigen::Matrix3d Jb = Eigen::Matrix3d::Identity();
   Jb(0, 2) = -s * local.x - c * local.y;
   Jb(1, 2) = c * local.x - s * local.y;
   Eigen::Matrix3d Jl = Eigen::Matrix3d::Identity();
   Jl.topLeftCorner<2, 2>() = rotation(th);
-  P_global = Jb * base_covariance() * Jb.transpose() + Jl * P_local * Jl.transpose();
+  P_global = Jb * P_o * Jb.transpose() + Jl * P_local * Jl.transpose();
+}
+
+void GlobalMap::to_global(const Pose2<double>& local, const Eigen::Matrix3d& P_local, Pose2<double>& global,
+                          Eigen::Matrix3d& P_global) const {
+  compose(x_.head<3>(), base_covariance(), local, P_local, global, P_global);
 }
 
 int GlobalMap::index_of_first(FeatureId first) const {

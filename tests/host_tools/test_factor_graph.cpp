@@ -111,9 +111,11 @@ TEST_CASE("factor graph: joint marginals equal ceres::Covariance's to 1e-9 relat
     CHECK(vars >= (size == 1 ? 150 : 1500));
     // The query: the first (fixed), a middle and the last frame, and every third landmark.
     std::vector<int> fs = {0, fg.frames() / 2, fg.frames() - 1}, ls;
+    ls.reserve(static_cast<std::size_t>(fg.landmarks()) / 3 + 1);
     for (int j = 0; j < fg.landmarks(); j += 3) ls.push_back(j);
     const Eigen::MatrixXd ours = fg.marginal(fs, ls);
     std::vector<const double*> blocks;
+    blocks.reserve(fs.size() + ls.size());
     for (int k : fs) blocks.push_back(fg.frame_block(k));
     for (int j : ls) blocks.push_back(fg.landmark_block(j));
     std::vector<std::pair<const double*, const double*>> pairs;

@@ -56,6 +56,9 @@ struct StepRecord {
   double assoc_s = 0;           ///< the scan's association time
   bool lost = false;            ///< the relocaliser's state after the scan: lost
   bool declared_found = false;  ///< the relocaliser confirmed its pose at this scan (found)
+  /// The estimate and its covariance set, with the variances and the NEES against `truth`.
+  /// @return the error (x, y, theta).
+  Eigen::Vector3d set_estimate(const Pose2<double>& x, const Eigen::Matrix3d& P);
 };
 
 /// Sums over a run's pairings of each innovation component k (0 range, 1 bearing): nis = nu_k^2 / S_kk

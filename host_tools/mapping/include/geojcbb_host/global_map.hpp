@@ -78,6 +78,11 @@ Submap submap_of(const ekf::Slam<T, B>& slam, int index) {
   return m;
 }
 
+/// A pose of a frame's, `local`, in the world through the frame's origin `o`: o (+) local, and its
+/// covariance from the two (uncorrelated: a local map begins with its origin exact).
+void compose(const Eigen::Vector3d& o, const Eigen::Matrix3d& P_o, const Pose2<double>& local,
+             const Eigen::Matrix3d& P_local, Pose2<double>& global, Eigen::Matrix3d& P_global);
+
 struct JoinOptions {
   /// The association between maps: PCJCBB, whose pose-free seed takes over when the base pose is
   /// uncertain (a long chain of maps, another robot's).
