@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "geojcbb_host/batch.hpp"
 #include "geojcbb_host/eval_cli.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/run_cli.hpp"
@@ -68,12 +69,21 @@ Subcommand add_mrclam_command(CLI::App& app) {
                  "as they were then")
       ->default_val(m.seconds)
       ->check(CLI::NonNegativeNumber);
+  auto batch = std::make_shared<bool>(false);
+  mr->add_flag("--batch", *batch,
+               "the batch reference: each replay's poses and landmarks solved at once (Ceres) with its own pairings "
+               "and with the labels, their mean position error beside the replay's (docs/mapping.md)");
   add_run_options(*mr, m.run);
-  return {mr, [o]() {
+  return {mr, [o, batch]() {
             MrclamOptions& mo = o->m;
             mo.strategies = select_methods(o->flags.strategies, true, o->flags.oracle);
             mo.jobs = o->flags.jobs;
             if (o->legacy) mo.camera = mo.drive = false;
+            if (*batch) {
+              if (!o->flags.link.port.empty() || !o->flags.link.device.empty())
+                throw std::invalid_argument("--batch: in process only (a device does not report its pairings)");
+              mo.batch = batch_errors;
+            }
             return with_device(o->flags.link, o->flags.oracle, mo.known_map,
                                [&](const RunInputsFn& runner, const std::string&) {
                                  mo.runner = runner;

@@ -89,15 +89,6 @@ struct BatchRow {
   double filter_m = 0, batch_m = 0, labels_m = 0;  ///< labels_m: the batch with the labels' pairings
 };
 
-BatchRow batch_row(RunSource& src, const BatchRecorder& rec, const RunResult& r, const RunOptions& ro) {
-  const StepSettings<double> ss = step_settings(ro, src.sensor);
-  const Mount<double> mount{ss.sensor_x_m, ss.sensor_y_m, ss.sensor_theta_rad};
-  const BatchProblem p = batch_problem(src, rec, r.trace, mount, false);
-  const BatchProblem q = batch_problem(src, rec, r.trace, mount, true);
-  return {true, mean_position_error(p, p.initial), mean_position_error(p, solve_batch(p, BatchOptions{}).poses),
-          mean_position_error(q, solve_batch(q, BatchOptions{}).poses)};
-}
-
 // The batch table: per scenario (a world's family) and strategy, the medians over its runs.
 void print_batch_table(const std::vector<Scenario>& scenarios, const std::vector<std::string>& family,
                        const std::vector<Method>& strategies, const std::vector<std::array<int, 3>>& job_of,
@@ -249,7 +240,7 @@ int run_sim(const SimOptions& o) {
     const Job& jb = jobs[j];
     RunOptions ro = o.run;
     strategies[jb.st].apply(ro);
-    BatchRecorder rec;
+    ScanRecorder rec;
     if (o.batch) {
       ro.record_trace = true;
       ro.on_scan = [&rec](const ScanOutcome& sc) { rec.on_scan(sc); };
@@ -261,7 +252,10 @@ int run_sim(const SimOptions& o) {
     try {
       SimSource src(scenarios[jb.sc], seed, ro.max_steps);
       r = o.runner ? o.runner(src, ro) : run_inputs(src, ro);
-      if (o.batch) batch_rows[j] = batch_row(src, rec, r, ro);
+      if (o.batch) {
+        const std::array<double, 3> e = batch_errors(src, rec, r, ro);
+        batch_rows[j] = {true, e[0], e[1], e[2]};
+      }
     } catch (const std::exception& e) {
       err = e.what();
     }

@@ -457,6 +457,18 @@ void SlamSession::State::smooth_steps(RunResult& res) const {
   res.mean_abs_y_m /= static_cast<double>(res.steps.size());
 }
 
+void ScanRecorder::on_scan(const ScanOutcome& s) {
+  Scan sc;
+  sc.t_s = s.t_s;
+  sc.obs = *s.scan;
+  sc.id.resize(sc.obs.size(), kNewFeature);
+  for (std::size_t i = 0; i < sc.obs.size(); ++i) {
+    const FeatureId p = (*s.paired)[i], a = (*s.added)[i];
+    sc.id[i] = p >= 0 ? p : a;
+  }
+  scans_.push_back(std::move(sc));
+}
+
 void SlamSession::trace(double t, std::vector<TracePoint>& trace) {
   State& s = *st_;
   trace.push_back({t, pose()});

@@ -114,18 +114,6 @@ int k_last(const BatchProblem& p) { return static_cast<int>(p.initial.size()) - 
 
 }  // namespace
 
-void BatchRecorder::on_scan(const ScanOutcome& s) {
-  Scan sc;
-  sc.t_s = s.t_s;
-  sc.obs = *s.scan;
-  sc.id.resize(sc.obs.size(), kNewFeature);
-  for (std::size_t i = 0; i < sc.obs.size(); ++i) {
-    const FeatureId p = (*s.paired)[i], a = (*s.added)[i];
-    sc.id[i] = p >= 0 ? p : a;
-  }
-  scans_.push_back(std::move(sc));
-}
-
 BatchProblem batch_problem(RunSource& src, const BatchRecorder& rec, const std::vector<TracePoint>& trace,
                            const Mount<double>& mount, bool by_labels) {
   BatchProblem p;
@@ -244,6 +232,15 @@ double mean_position_error(const BatchProblem& p, const std::vector<Pose2<double
     ++n;
   }
   return n > 0 ? sum / n : NAN;
+}
+
+std::array<double, 3> batch_errors(RunSource& src, const BatchRecorder& rec, const RunResult& r, const RunOptions& ro) {
+  const StepSettings<double> ss = step_settings(ro, src.sensor);
+  const Mount<double> mount{ss.sensor_x_m, ss.sensor_y_m, ss.sensor_theta_rad};
+  const BatchProblem own = batch_problem(src, rec, r.trace, mount, false);
+  const BatchProblem labels = batch_problem(src, rec, r.trace, mount, true);
+  return {mean_position_error(own, own.initial), mean_position_error(own, solve_batch(own, BatchOptions{}).poses),
+          mean_position_error(labels, solve_batch(labels, BatchOptions{}).poses)};
 }
 
 }  // namespace geojcbb::host

@@ -19,6 +19,8 @@
 //     given (MrclamNoise::from_data; how: docs/mrclam.md).
 #pragma once
 
+#include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -132,6 +134,11 @@ struct MrclamOptions {
   MergeOptions merge_options;
   /// Runs each replay's inputs (empty: in process, run_inputs); a device over the link needs jobs = 1.
   RunInputsFn runner;
+  /// --batch (set by the command line, which links the batch reference: host_tools/mapping): per
+  /// replay, from its source, what its steps made of each scan, its result (with its trace) and its
+  /// settings, the mean position error [m] of the replay's trace, of the batch with its own pairings
+  /// and of the batch with the labels. Empty: no batch.
+  std::function<std::array<double, 3>(RunSource&, const ScanRecorder&, const RunResult&, const RunOptions&)> batch;
 };
 
 /// Every strategy on every robot of every dataset: tables on stdout, mrclam.csv

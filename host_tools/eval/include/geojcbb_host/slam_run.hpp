@@ -32,6 +32,23 @@ struct ScanOutcome {
   const std::vector<FeatureId>* added = nullptr;
 };
 
+/// What a run's steps made of each scan, recorded through RunOptions::on_scan: the observations as
+/// the filter took them and per observation the landmark id it was paired with or made (or none).
+/// The batch reference (host_tools/mapping, batch.hpp) is built from it.
+class ScanRecorder {
+ public:
+  void on_scan(const ScanOutcome& s);
+  struct Scan {
+    double t_s = 0;
+    std::vector<SimObservation> obs;
+    std::vector<FeatureId> id;  ///< per observation: paired or made; kNewFeature where neither
+  };
+  const std::vector<Scan>& scans() const { return scans_; }
+
+ private:
+  std::vector<Scan> scans_;
+};
+
 /// A run's settings: the SLAM step's (one StepSettings, every option of core/options.h) and what only
 /// the host knows. step_settings() applies the host's fields to the step's: the in-process filter and
 /// a device over the link are configured from its result, so both run the same settings.

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -69,21 +70,8 @@ struct BatchResult {
   std::string report;  ///< Ceres' brief report
 };
 
-/// What a run's steps made of each scan, recorded through RunOptions::on_scan: the observations as
-/// the filter took them and per observation the landmark id it was paired with or made (or none).
-class BatchRecorder {
- public:
-  void on_scan(const ScanOutcome& s);
-  struct Scan {
-    double t_s = 0;
-    std::vector<SimObservation> obs;
-    std::vector<FeatureId> id;  ///< per observation: paired or made; kNewFeature where neither
-  };
-  const std::vector<Scan>& scans() const { return scans_; }
-
- private:
-  std::vector<Scan> scans_;
-};
+/// What a run's steps made of each scan (slam_run.hpp's ScanRecorder).
+using BatchRecorder = ScanRecorder;
 
 /// The problem of a run: its inputs (`src`, rewound and read to the end, then rewound), what the
 /// steps made of its scans (`rec`, matched by scan time), and the filter's trace
@@ -96,6 +84,12 @@ BatchProblem batch_problem(RunSource& src, const BatchRecorder& rec, const std::
 /// Solves the problem (Ceres, sparse normal Cholesky). Throws std::invalid_argument for an empty
 /// problem.
 BatchResult solve_batch(const BatchProblem& p, const BatchOptions& o);
+
+/// A run's batch references, each started from its trace: the mean position error [m] of the trace
+/// at the scans (the filter's, or with local maps on the solver the joined map's smoothed one), of the
+/// batch with the run's own pairings (with local maps: the ids the local maps gave, not the joins'
+/// fusions) and of the batch with the labels (the true association). NaN where no pose has a truth.
+std::array<double, 3> batch_errors(RunSource& src, const BatchRecorder& rec, const RunResult& r, const RunOptions& ro);
 
 /// The mean position error [m] over the poses with a true pose of `poses` (one per scan of p), or
 /// NaN when none has one.
