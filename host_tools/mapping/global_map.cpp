@@ -13,6 +13,7 @@
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/core/strategy.hpp"
+#include "geojcbb/ekf/motion.hpp"
 
 namespace geojcbb::host {
 
@@ -162,16 +163,10 @@ void GlobalMap::cache_joint(const std::vector<int>& gs) const {
 
 void compose(const Eigen::Vector3d& o, const Eigen::Matrix3d& P_o, const Pose2<double>& local,
              const Eigen::Matrix3d& P_local, Pose2<double>& global, Eigen::Matrix3d& P_global) {
-  const double th = o(2), c = std::cos(th), s = std::sin(th);
-  global.x = o(0) + c * local.x - s * local.y;
-  global.y = o(1) + s * local.x + c * local.y;
-  global.theta = wrap_angle(th + local.theta);
-  Eigen::Matrix3d Jb = Eigen::Matrix3d::Identity();
-  Jb(0, 2) = -s * local.x - c * local.y;
-  Jb(1, 2) = c * local.x - s * local.y;
-  Eigen::Matrix3d Jl = Eigen::Matrix3d::Identity();
-  Jl.topLeftCorner<2, 2>() = rotation(th);
-  P_global = Jb * P_o * Jb.transpose() + Jl * P_local * Jl.transpose();
+  Eigen::Matrix3d Jo, Jl;
+  global = ekf::compose(Pose2<double>{o(0), o(1), o(2)}, ekf::PoseIncrement<double>{local.x, local.y, local.theta}, &Jo,
+                        &Jl);
+  P_global = Jo * P_o * Jo.transpose() + Jl * P_local * Jl.transpose();
 }
 
 void GlobalMap::to_global(const Pose2<double>& local, const Eigen::Matrix3d& P_local, Pose2<double>& global,
@@ -469,19 +464,13 @@ JoinResult GlobalMap::join(const Submap& m) {
   }
   ++maps_;
   frame_of_map_.push_back(base_frame_);
-  origins_.emplace_back(x_.head<3>());
-  origin_cov_.push_back(base_covariance());
   return res;
 }
 
 void GlobalMap::origins(std::vector<Eigen::Vector3d>& o, std::vector<Eigen::Matrix3d>& P) const {
+  if (!graph_) throw std::logic_error("origins: a dense global map does not keep its maps' origins");
   o.clear();
   P.clear();
-  if (!graph_) {
-    o = origins_;
-    P = origin_cov_;
-    return;
-  }
   const Eigen::MatrixXd S = graph_->marginal(frame_of_map_, {});
   for (std::size_t k = 0; k < frame_of_map_.size(); ++k) {
     const auto r = 3 * static_cast<Eigen::Index>(k);
@@ -492,7 +481,8 @@ void GlobalMap::origins(std::vector<Eigen::Vector3d>& o, std::vector<Eigen::Matr
 
 Eigen::Vector3d GlobalMap::origin(int k) const {
   if (k < 0 || k > maps_) throw std::out_of_range("origin: no such local map");
-  return graph_ ? graph_->frame(frame_of_map_[static_cast<std::size_t>(k)]) : origins_[static_cast<std::size_t>(k)];
+  if (!graph_) throw std::logic_error("origin: a dense global map does not keep its maps' origins");
+  return graph_->frame(frame_of_map_[static_cast<std::size_t>(k)]);
 }
 
 void GlobalMap::add_factor(const Submap& m, const Shared& sh, const std::vector<int>& var, const Eigen::Vector3d& end) {

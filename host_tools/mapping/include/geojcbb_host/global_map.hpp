@@ -168,11 +168,11 @@ class GlobalMap {
   FeatureId first_id(int k) const { return first_id_[static_cast<std::size_t>(k)]; }
   /// Local maps joined so far.
   int maps() const { return maps_; }
-  /// The origin of local map k (k <= maps(): maps() is the one being built) in the world: dense, as
-  /// it was when the map began (never revisited); kGraph, the solution's (relinearised since).
+  /// kGraph: the origin of local map k (k <= maps(): maps() is the one being built) in the world, as
+  /// the last solve left it. Dense, the origins are never revisited: a trace needs no recomposing
+  /// (std::logic_error).
   Eigen::Vector3d origin(int k) const;
-  /// Every local map's origin (0..maps()) and its marginal covariance (dense: as it was when the map
-  /// began; kGraph: the solution's, from one factorisation).
+  /// kGraph: every local map's origin (0..maps()) and its marginal covariance, from one factorisation.
   void origins(std::vector<Eigen::Vector3d>& o, std::vector<Eigen::Matrix3d>& P) const;
   /// The local ids the last joined map kept into the next one (its Submap::carried): what the next
   /// map begins with.
@@ -242,12 +242,10 @@ class GlobalMap {
   /// kGraph: the joint marginals of the base with landmarks `gs` (cached until the next join).
   void cache_joint(const std::vector<int>& gs) const;
   std::unique_ptr<FactorGraph> graph_;
-  std::vector<int> var_of_;                                           ///< kGraph: global landmark -> its graph variable
-  std::vector<int> frame_of_map_ = {0};                               ///< kGraph: local map k's origin's frame
-  std::vector<Eigen::Vector3d> origins_ = {Eigen::Vector3d::Zero()};  ///< dense: each map's origin as it began
-  std::vector<Eigen::Matrix3d> origin_cov_ = {Eigen::Matrix3d::Zero()};  ///< dense: and its covariance then
-  int base_frame_ = 0;                                                   ///< kGraph: the base's frame
-  Eigen::Matrix3d base_cov_ = Eigen::Matrix3d::Zero();                   ///< kGraph: the base's marginal
+  std::vector<int> var_of_;                             ///< kGraph: global landmark -> its graph variable
+  std::vector<int> frame_of_map_ = {0};                 ///< kGraph: local map k's origin's frame
+  int base_frame_ = 0;                                  ///< kGraph: the base's frame
+  Eigen::Matrix3d base_cov_ = Eigen::Matrix3d::Zero();  ///< kGraph: the base's marginal
   /// kGraph: [base, landmark] joint marginals (5 x 5) since the last join, per global landmark.
   mutable std::unordered_map<int, Eigen::Matrix<double, 5, 5>> joint_;
   /// kGraph: each landmark's marginal when last computed, in the global frame: a bound on today's
