@@ -37,6 +37,7 @@ struct Options {
   double sigma_m = 0.1;
   unsigned seed = 1;
   JoinOptions::Solver solver = JoinOptions::Solver::kDense;
+  int window = JoinOptions{}.solver_window;
 };
 
 /// The process's peak resident memory so far [MB].
@@ -106,6 +107,9 @@ int run(int argc, char** argv) {
   app.add_option("--solver", o.solver, "the global map: dense (the EKF-style join) or graph (factors on Ceres)")
       ->transform(CLI::CheckedTransformer(std::map<std::string, JoinOptions::Solver>{
           {"dense", JoinOptions::Solver::kDense}, {"graph", JoinOptions::Solver::kGraph}}));
+  app.add_option("--window", o.window, "with --solver graph: the fixed window in front [local maps]; 0: none")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000000));
   CLI11_PARSE(app, argc, argv);
   if (o.overlap >= o.map_landmarks) throw std::runtime_error("--overlap must be below --map-landmarks");
 
@@ -115,6 +119,7 @@ int run(int argc, char** argv) {
   std::uniform_real_distribution<double> ux(0.0, L), uy(-10.0, 10.0);
   JoinOptions jo;
   jo.solver = o.solver;
+  jo.solver_window = o.window;
   GlobalMap g{jo};
   FeatureId next_id = 0;
   std::vector<Eigen::Vector2d> previous;

@@ -439,7 +439,12 @@ JoinResult GlobalMap::join(const Submap& m) {
     add_factor(m, sh, var, X.segment<3>(D0));
     var_of_ = std::move(vars);
     own_cov_ = std::move(own);
-    last_solve_ = graph_->solve(opt_.solver_iterations);
+    if (opt_.solver_window > 0) {
+      last_solve_ = graph_->solve_window(opt_.solver_iterations);
+      graph_->settle(opt_.solver_window);
+    } else {
+      last_solve_ = graph_->solve(opt_.solver_iterations);
+    }
     x_.resize(3 + 2 * static_cast<Eigen::Index>(var_of_.size()));
     x_.head<3>() = graph_->frame(base_frame_);
     for (std::size_t k = 0; k < var_of_.size(); ++k)
@@ -530,26 +535,9 @@ void GlobalMap::add_factor(const Submap& m, const Shared& sh, const std::vector<
   // 10^10 in information, and a direction is uninformed only against its own scale. A diagonal entry
   // below 1e-9 of the posterior's information there is such a direction (a carried landmark the map
   // learned nothing of: its prior divided out).
-  const Eigen::VectorXd post = posterior.diagonal()(keep);
-  Eigen::VectorXd scale(Lk.rows());
-  for (Eigen::Index a = 0; a < Lk.rows(); ++a) scale(a) = std::sqrt(std::max(Lk(a, a), 1e-9 * std::abs(post(a))));
-  const Eigen::VectorXd inv_scale = scale.cwiseInverse();
-  const Eigen::MatrixXd Ls = inv_scale.asDiagonal() * Lk * inv_scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Ls);
-  std::vector<int> dirs;
-  for (Eigen::Index e = 0; e < Ls.rows(); ++e)
-    if (eig.eigenvalues()(e) > 1e-9) dirs.push_back(static_cast<int>(e));
-  if (dirs.empty()) throw std::runtime_error("join: a local map that informs nothing");
-  const auto r = static_cast<Eigen::Index>(dirs.size());
-  f.W.resize(r, Lk.cols());
-  f.c.resize(r);
-  const Eigen::VectorXd gs = inv_scale.cwiseProduct(gk);
-  for (Eigen::Index q = 0; q < r; ++q) {
-    const double lambda = eig.eigenvalues()(dirs[static_cast<std::size_t>(q)]);
-    const Eigen::VectorXd vq = eig.eigenvectors().col(dirs[static_cast<std::size_t>(q)]);
-    f.W.row(q) = std::sqrt(lambda) * vq.cwiseProduct(scale).transpose();
-    f.c(q) = -vq.dot(gs) / std::sqrt(lambda);
-  }
+  const Eigen::VectorXd floor = 1e-9 * posterior.diagonal()(keep).cwiseAbs();
+  square_root_information(Lk, gk, floor, f.W, f.c);
+  const auto r = f.W.rows();
   f.y0 = m.x(keep);
   if (opt_.loss_confidence > 0 && chi2_inv(opt_.loss_confidence, static_cast<int>(r), f.loss_d2) != Status::kOk)
     throw std::runtime_error("join: chi2");

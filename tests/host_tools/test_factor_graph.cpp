@@ -14,7 +14,9 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -132,6 +134,25 @@ double relative_difference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
 }
 
+/// The joint covariance of frames `fs` and landmarks `ls` by ceres::Covariance (sparse QR) on the
+/// graph's whole problem.
+Eigen::MatrixXd ceres_covariance(const FactorGraph& fg, const std::vector<int>& fs, const std::vector<int>& ls) {
+  std::vector<const double*> blocks;
+  blocks.reserve(fs.size() + ls.size());
+  for (int k : fs) blocks.push_back(fg.frame_block(k));
+  for (int j : ls) blocks.push_back(fg.landmark_block(j));
+  std::vector<std::pair<const double*, const double*>> pairs;
+  for (std::size_t a = 0; a < blocks.size(); ++a)
+    for (std::size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::SPARSE_QR;
+  ceres::Covariance cov(co);
+  const auto d = static_cast<Eigen::Index>(3 * fs.size() + 2 * ls.size());
+  Eigen::MatrixXd out = Eigen::MatrixXd::Constant(d, d, std::numeric_limits<double>::quiet_NaN());
+  if (cov.Compute(pairs, &fg.problem())) cov.GetCovarianceMatrix(blocks, out.data());  // symmetric: either order
+  return out;
+}
+
 }  // namespace
 
 TEST_CASE("factor graph: joint marginals equal ceres::Covariance's to 1e-9 relative (up to 2,000 variables)") {
@@ -155,22 +176,53 @@ TEST_CASE("factor graph: joint marginals equal ceres::Covariance's to 1e-9 relat
     ls.reserve(static_cast<std::size_t>(fg.landmarks()) / 3 + 1);
     for (int j = 0; j < fg.landmarks(); j += 3) ls.push_back(j);
     const Eigen::MatrixXd ours = fg.marginal(fs, ls);
-    std::vector<const double*> blocks;
-    blocks.reserve(fs.size() + ls.size());
-    for (int k : fs) blocks.push_back(fg.frame_block(k));
-    for (int j : ls) blocks.push_back(fg.landmark_block(j));
-    std::vector<std::pair<const double*, const double*>> pairs;
-    for (std::size_t a = 0; a < blocks.size(); ++a)
-      for (std::size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::SPARSE_QR;
-    ceres::Covariance cov(co);
-    REQUIRE(cov.Compute(pairs, &fg.problem()));
-    Eigen::MatrixXd theirs(ours.rows(), ours.cols());
-    REQUIRE(cov.GetCovarianceMatrix(blocks, theirs.data()));  // column-major = row-major: symmetric
-    CHECK(relative_difference(ours, theirs) < 1e-9);
+    CHECK(relative_difference(ours, ceres_covariance(fg, fs, ls)) < 1e-9);
     CHECK(ours.topLeftCorner<3, 3>().isZero());  // the fixed frame
   }
+}
+
+TEST_CASE("factor graph: the fixed window's marginals equal ceres::Covariance's; a factor behind it drops the prior") {
+  // One lap of 24 maps (no loop closed), solved; every map but the last 4 absorbed into the prior.
+  const Loop L = make_loop(300, 24, 1, 0.1, 0.02, 5);
+  FactorGraph fg;
+  direct_graph(L, 24, fg);
+  fg.settle(4);
+  CHECK(fg.settled() == 20);
+  // The last frame and the landmarks of the last two maps: in the window.
+  std::vector<int> vars;  // the graph's variables of those landmarks (direct_graph numbers them as first seen)
+  {
+    std::vector<int> var(L.world.size(), -1);
+    int next = 0;
+    for (std::size_t k = 0; k < L.maps.size(); ++k)
+      for (int w : L.seen[k])
+        if (var[static_cast<std::size_t>(w)] < 0) var[static_cast<std::size_t>(w)] = next++;
+    for (std::size_t k = 22; k < 24; ++k)
+      for (int w : L.seen[k])
+        if (std::find(vars.begin(), vars.end(), var[static_cast<std::size_t>(w)]) == vars.end())
+          vars.push_back(var[static_cast<std::size_t>(w)]);
+  }
+  REQUIRE(vars.size() >= 10);
+  const std::vector<int> fs = {fg.frames() - 1, fg.frames() - 2};
+  const Eigen::MatrixXd ours = fg.marginal(fs, vars);
+  CHECK(fg.last_marginal_windowed());
+  CHECK(relative_difference(ours, ceres_covariance(fg, fs, vars)) < 1e-9);
+  // With the first map's landmarks (eliminated): from every factor, the same.
+  std::vector<int> old = vars;
+  old.push_back(0);
+  const Eigen::MatrixXd all = fg.marginal(fs, old);
+  CHECK_FALSE(fg.last_marginal_windowed());
+  CHECK(relative_difference(all, ceres_covariance(fg, fs, old)) < 1e-9);
+  // A factor on an eliminated landmark (a loop closure into the past): the prior is dropped.
+  MapFactor f;
+  f.from = fg.frames() - 1;
+  f.to = fg.add_frame(fg.frame(f.from));
+  f.landmarks = {0};
+  f.y0 = Eigen::VectorXd::Zero(5);
+  f.y0.tail<2>() = world_to(fg.frame(f.from), fg.landmark(0));
+  f.W = Eigen::MatrixXd::Identity(5, 5);
+  f.c = Eigen::VectorXd::Zero(5);
+  fg.add_map(f);
+  CHECK(fg.settled() == 0);
 }
 
 TEST_CASE("factor graph: around a loop of local maps every join decides as the dense join's") {

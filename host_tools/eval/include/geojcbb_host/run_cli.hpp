@@ -73,6 +73,11 @@ inline void add_run_options(CLI::App& app, RunOptions& run) {
                  "none")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 0.999999));
+  app.add_option("--join-window", run.join.solver_window,
+                 "with --join-solver graph: a join solves its last N local maps and a prior holding the older ones "
+                 "(a map that reaches behind them solves everything); 0: every join solves every map")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000000));
 }
 
 }  // namespace geojcbb::host

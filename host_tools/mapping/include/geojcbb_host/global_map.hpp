@@ -103,6 +103,11 @@ struct JoinOptions {
   enum class Solver { kDense, kGraph };
   Solver solver = Solver::kDense;
   int solver_iterations = 20;  ///< kGraph: Ceres' iterations per join at most
+  /// kGraph: the fixed window in front (docs/mapping.md): a join solves and queries its last
+  /// `solver_window` local maps' factors and a prior that holds the older ones (FactorGraph::settle);
+  /// a map that reaches behind the window (a loop closure) solves everything again. 0: every join
+  /// relinearises and solves every factor.
+  int solver_window = 8;
   /// kGraph: Huber's loss on a map's factor beyond chi2(loss_confidence, its dimension) (0: none).
   double loss_confidence = 0;
 };
