@@ -14,6 +14,7 @@
 #include "geojcbb/core/range_bearing.hpp"
 #include "geojcbb/core/strategy.hpp"
 #include "geojcbb/ekf/motion.hpp"
+#include "geojcbb_host/fusion.hpp"
 
 namespace geojcbb::host {
 
@@ -61,26 +62,6 @@ std::vector<Eigen::Index> nonzero_columns(const Eigen::MatrixXd& A) {
   for (Eigen::Index c = 0; c < A.cols(); ++c)
     if ((A.col(c).array() != 0.0).any()) nz.push_back(c);
   return nz;
-}
-
-/// P = (P + P^T) / 2 in place, tile by tile: the same values as the expression (the sum is
-/// commutative) without a second matrix of the global map's size (docs/submaps.md, "How the host's
-/// join scales").
-void symmetrize(Eigen::MatrixXd& P) {
-  constexpr Eigen::Index kTile = 64;
-  const Eigen::Index n = P.rows();
-  for (Eigen::Index c0 = 0; c0 < n; c0 += kTile) {
-    for (Eigen::Index r0 = 0; r0 <= c0; r0 += kTile) {
-      const Eigen::Index c1 = std::min(n, c0 + kTile), r1 = std::min(n, r0 + kTile);
-      for (Eigen::Index c = c0; c < c1; ++c) {
-        for (Eigen::Index r = r0; r < std::min(r1, c); ++r) {
-          const double v = 0.5 * (P(r, c) + P(c, r));
-          P(r, c) = v;
-          P(c, r) = v;
-        }
-      }
-    }
-  }
 }
 
 }  // namespace
@@ -677,55 +658,27 @@ GlobalMap::Pairing GlobalMap::associate_map(const Submap& m, const Shared& sh, c
 
 std::vector<int> GlobalMap::fuse(const std::vector<std::pair<int, int>>& pairs, const std::vector<int>& row_of,
                                  bool compatible, Eigen::VectorXd& X, Eigen::MatrixXd& P, JoinResult& res) const {
-  // The pairs' constraints l_new - l_global = 0 fused as one update, unless the association's answer
-  // is not jointly compatible; their d2 with the full covariance is reported.
+  // The pairs' constraints l_new - l_global = 0 fused as one update (fusion.hpp), unless the
+  // association's answer is not jointly compatible; their d2 with the full covariance is reported.
   std::vector<int> in;
   if (pairs.empty()) return in;
   const int k = static_cast<int>(pairs.size());
-  const int D = static_cast<int>(X.size());
-  Eigen::MatrixXd HP(2 * k, D);  // H P, H = [.. -I (global) .. +I (new) ..]
-  Eigen::VectorXd nu(2 * k);
-  Eigen::MatrixXd S(2 * k, 2 * k);
-  for (int p = 0; p < k; ++p) {
-    const int rl = row_of[static_cast<std::size_t>(pairs[static_cast<std::size_t>(p)].first)];
-    const int rg = 3 + 2 * pairs[static_cast<std::size_t>(p)].second;
-    HP.middleRows<2>(2 * p) = P.middleRows<2>(rl) - P.middleRows<2>(rg);
-    nu.segment<2>(2 * p) = X.segment<2>(rg) - X.segment<2>(rl);
-  }
-  for (int p = 0; p < k; ++p) {
-    const int rl = row_of[static_cast<std::size_t>(pairs[static_cast<std::size_t>(p)].first)];
-    const int rg = 3 + 2 * pairs[static_cast<std::size_t>(p)].second;
-    S.middleCols<2>(2 * p) = HP.middleCols<2>(rl) - HP.middleCols<2>(rg);
-  }
-  S = (0.5 * (S + S.transpose()) + opt_.constraint_var_m2 * Eigen::MatrixXd::Identity(2 * k, 2 * k)).eval();
+  std::vector<std::pair<int, int>> rows;
+  rows.reserve(pairs.size());
+  for (const auto& [i, g] : pairs) rows.emplace_back(row_of[static_cast<std::size_t>(i)], 3 + 2 * g);
+  const SamePoints c = same_points(rows, X, P, opt_.constraint_var_m2);
   // The largest jointly compatible subset, with the full covariance (the association's test
   // leaves out the local map's own correlations): the pair whose removal lowers d2 most goes,
   // until the rest pass chi2(confidence, 2 pairs).  O(k^5) at worst, k pairs.
   in.resize(static_cast<std::size_t>(k));
   for (int p = 0; p < k; ++p) in[static_cast<std::size_t>(p)] = p;
-  auto rows_of = [](const std::vector<int>& w) {
-    std::vector<int> r;
-    r.reserve(2 * w.size());
-    for (int p : w) {
-      r.push_back(2 * p);
-      r.push_back(2 * p + 1);
-    }
-    return r;
-  };
-  auto d2_of = [&](const std::vector<int>& w) {
-    if (w.empty()) return 0.0;
-    const std::vector<int> r = rows_of(w);
-    const Eigen::LLT<Eigen::MatrixXd> l(S(r, r));
-    const Eigen::VectorXd e = nu(r);
-    return l.info() == Eigen::Success ? e.dot(l.solve(e)) : std::numeric_limits<double>::infinity();
-  };
   auto limit_of = [&](std::size_t pairs_in) {
     double q = 0;
     if (chi2_inv(opt_.confidence, 2 * static_cast<int>(pairs_in), q) != Status::kOk)
       throw std::runtime_error("join: chi2");
     return q;
   };
-  res.joint_d2 = d2_of(in);
+  res.joint_d2 = joint_d2(c, in);
   double d2 = res.joint_d2;
   while (opt_.joint_check && !in.empty() && !(d2 <= limit_of(in.size()))) {
     std::size_t worst = 0;
@@ -733,7 +686,7 @@ std::vector<int> GlobalMap::fuse(const std::vector<std::pair<int, int>>& pairs, 
     for (std::size_t q = 0; q < in.size(); ++q) {
       std::vector<int> w = in;
       w.erase(w.begin() + static_cast<std::ptrdiff_t>(q));
-      const double e = d2_of(w);
+      const double e = joint_d2(c, w);
       if (e < best) {
         best = e;
         worst = q;
@@ -743,15 +696,8 @@ std::vector<int> GlobalMap::fuse(const std::vector<std::pair<int, int>>& pairs, 
     ++res.pruned;
     d2 = best;
   }
-  res.refused = !compatible || !std::isfinite(d2);
+  res.refused = !compatible || !std::isfinite(d2) || !fuse_same_points(c, in, X, P);
   if (res.refused || in.empty()) return {};
-  const std::vector<int> r = rows_of(in);
-  const Eigen::LLT<Eigen::MatrixXd> llt(S(r, r));
-  const Eigen::MatrixXd HPi = HP(r, Eigen::indexing::all);
-  const Eigen::MatrixXd K = llt.solve(HPi).transpose();  // P H^T S^-1
-  X += K * nu(r);
-  P.noalias() -= K * HPi;
-  symmetrize(P);
   return in;
 }
 
