@@ -3,15 +3,17 @@
 // `--overlap` are the previous map's last ones seen again (found by the join's association, not by
 // their ids), joined one after the other until the global map holds `--max-landmarks`, dense or on
 // the solver (`--solver`). Per size bin of the global map: the join's median and 95th percentile
-// and their ratio to the first bin's median (measured in the same run: timing is reported, never
-// asserted), a joint-marginal query's (the base and the 100 landmarks nearest it), what was fused
-// and kept apart, and the process's peak resident memory at the bin's end.
+// and maximum and the median's ratio to the first bin's (measured in the same run: timing is
+// reported, never asserted), a joint-marginal query's (the base and the 100 landmarks nearest it)
+// and how many the window answered, what was fused and kept apart, and the process's peak resident
+// memory at the bin's end. Each bin is printed when the map grows past it.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <sys/resource.h>
@@ -19,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Dense>
 
+#include "geojcbb_host/factor_graph.hpp"
 #include "geojcbb_host/global_map.hpp"
 #include "geojcbb_host/guarded_main.hpp"
 
@@ -126,11 +129,39 @@ int run(int argc, char** argv) {
   struct Bin {
     int upto;
     std::vector<double> ms, query_ms;
-    int joins = 0, fused = 0, expected = 0, declined = 0, refused = 0;
+    int joins = 0, fused = 0, expected = 0, declined = 0, refused = 0, windowed = 0;
     double rss_mb = 0;
   };
   std::vector<Bin> bins;
-  for (int b = 100; b <= o.max_landmarks * 2; b *= 2) bins.push_back(Bin{b, {}, {}, 0, 0, 0, 0, 0, 0});
+  for (int b = 100; b <= o.max_landmarks * 2; b *= 2) bins.push_back(Bin{b, {}, {}, 0, 0, 0, 0, 0, 0, 0});
+  std::printf("# the host's join as the global map grows (%s%s): %d-landmark local maps, %d seen again per map\n\n",
+              o.solver == JoinOptions::Solver::kGraph ? "graph" : "dense",
+              o.solver == JoinOptions::Solver::kGraph ? (", window " + std::to_string(o.window)).c_str() : "",
+              o.map_landmarks, o.overlap);
+  std::printf(
+      "| global landmarks before the join | joins | join median [ms] | join p95 [ms] | join max [ms] | median / first "
+      "bin's | query median [ms] | query p95 [ms] | queries from the window | fused / seen again | declined or "
+      "pruned | refused | peak resident [MB] |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "
+      "| --- |\n");
+  std::fflush(stdout);
+  double base = 0;
+  std::size_t printed = 0;
+  int lo = 0;
+  auto print_bins = [&](std::size_t upto) {  // each bin once it is complete
+    for (; printed < upto; ++printed) {
+      const Bin& b = bins[printed];
+      if (b.joins > 0) {
+        const double med = quantile(b.ms, 0.5);
+        if (base == 0) base = med;
+        std::printf("| %d-%d | %d | %.2f | %.2f | %.2f | %.1f | %.2f | %.2f | %d / %d | %d / %d | %d | %d | %.0f |\n", lo,
+                    b.upto - 1, b.joins, med, quantile(b.ms, 0.95), quantile(b.ms, 1.0), med / base,
+                    quantile(b.query_ms, 0.5), quantile(b.query_ms, 0.95), b.windowed, b.joins, b.fused, b.expected,
+                    b.declined, b.refused, b.rss_mb);
+        std::fflush(stdout);
+      }
+      lo = b.upto;
+    }
+  };
   for (int k = 0; g.landmarks() < o.max_landmarks; ++k) {
     std::vector<Eigen::Vector2d> world(previous.end() - std::min<std::ptrdiff_t>(o.overlap, previous.size()),
                                        previous.end());
@@ -147,6 +178,7 @@ int run(int argc, char** argv) {
     const JoinResult j = g.join(m);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     auto bin = std::find_if(bins.begin(), bins.end(), [&](const Bin& x) { return before < x.upto; });
+    print_bins(static_cast<std::size_t>(bin - bins.begin()));
     if (k > 0 && bin != bins.end()) {
       bin->ms.push_back(ms);
       ++bin->joins;
@@ -155,31 +187,12 @@ int run(int argc, char** argv) {
       bin->declined += j.declined + j.pruned;
       bin->refused += j.refused ? 1 : 0;
       bin->query_ms.push_back(query_ms(g));
+      bin->windowed += g.graph() != nullptr && g.graph()->last_marginal_windowed() ? 1 : 0;
       bin->rss_mb = peak_rss_mb();
     }
     previous = std::move(world);
   }
-  std::printf("# the host's join as the global map grows (%s): %d-landmark local maps, %d seen again per map\n\n",
-              o.solver == JoinOptions::Solver::kGraph ? "graph" : "dense", o.map_landmarks, o.overlap);
-  std::printf(
-      "| global landmarks before the join | joins | join median [ms] | join p95 [ms] | median / first bin's | "
-      "query median [ms] | query p95 [ms] | fused / seen again | declined or pruned | refused | peak resident [MB] "
-      "|\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  double base = 0;
-  int lo = 0;
-  for (const Bin& b : bins) {
-    if (b.joins == 0) {
-      lo = b.upto;
-      continue;
-    }
-    const double med = quantile(b.ms, 0.5);
-    if (base == 0) base = med;
-    std::printf("| %d-%d | %d | %.2f | %.2f | %.1f | %.2f | %.2f | %d / %d | %d | %d | %.0f |\n", lo, b.upto - 1,
-                b.joins, med, quantile(b.ms, 0.95), med / base, quantile(b.query_ms, 0.5), quantile(b.query_ms, 0.95),
-                b.fused, b.expected, b.declined, b.refused, b.rss_mb);
-    std::fflush(stdout);
-    lo = b.upto;
-  }
+  print_bins(bins.size());
   return 0;
 }
 

@@ -465,8 +465,18 @@ void FactorGraph::settle(int window) {
     Eigen::MatrixXd W;
     Eigen::VectorXd c, x0(static_cast<Eigen::Index>(keep.size()));
     if (!keep.empty()) {
-      const Eigen::VectorXd floor = (1e-12 * Hk.diagonal().cwiseAbs()).array() + 1e-300;
-      square_root_information(Hk, bk, floor, W, c);
+      // The prior's square root by Cholesky (W = L^T, c = -L^-1 b), every direction kept: its
+      // information on the absolute position of what it holds is all that anchors the window, and
+      // after a long chain it is 10^-8 of the relative one (a threshold would drop it). The informed
+      // directions of an eigendecomposition only when Hk is not positive definite.
+      const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (Hk + Hk.transpose()));
+      if (llt.info() == Eigen::Success) {
+        W = llt.matrixU();
+        c = -llt.matrixL().solve(bk);
+      } else {
+        const Eigen::VectorXd floor = (1e-12 * Hk.diagonal().cwiseAbs()).array() + 1e-300;
+        square_root_information(Hk, bk, floor, W, c);
+      }
     }
     std::vector<int> dims;
     std::vector<bool> is_frame;
