@@ -6,7 +6,7 @@
 
 #include "geojcbb_host/batch.hpp"
 #include "geojcbb_host/eval_cli.hpp"
-#include "geojcbb_host/mrclam_replay.hpp"
+#include "geojcbb_host/mrclam_suite.hpp"
 #include "geojcbb_host/run_cli.hpp"
 
 namespace geojcbb::host {

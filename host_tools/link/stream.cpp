@@ -204,85 +204,119 @@ struct InFlight {
   Pose2<double> true_pose;
 };
 
-/// One attempt at a run: throws LinkError kRestart when the link asks for a new start.
-RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so) {
-  const proto::Capabilities& caps = link.capabilities();
-  const std::size_t device_obs = std::min<std::size_t>(kLinkMaxObs, caps.max_observations);
-  const std::size_t max_obs =
-      so.max_observations > 0 ? std::min(device_obs, static_cast<std::size_t>(so.max_observations)) : device_obs;
-  const proto::Config c = link_config(src.sensor, o);
-  check_capacity(c, caps);
-  link.configure(c);
-  link.reset(link_reset(src.x0, src.P0));
-  RunScorer scorer(src.true_landmarks, o.landmark_group);
-  RunResult& res = scorer.result();
-  const std::size_t window = static_cast<std::size_t>(std::max(1, so.window));
-  std::deque<InFlight> flight;
-  std::vector<FeatureId> paired;
-  bool noted_truncation = false;
-  int not_augmented = 0;
-  std::uint32_t next_batch = 0;
-  // Sequential map joining: the device's local maps joined on the host (its CONFIG has the rule).
-  const StepSettings<double> ss = step_settings(o, src.sensor);
-  const bool maps = ss.submap_landmarks > 0 || ss.submap_distance_m > 0 || ss.submap_scans > 0;
-  std::unique_ptr<GlobalMap> global = maps ? make_global_map(o, ss) : nullptr;
-  std::vector<int> id_truth;  // landmark id -> its truth
-  std::uint32_t map_id = 0;
-  double last_t = 0;            // the last answered scan's time (a join's)
-  std::vector<RunInput> moves;  // predictions since the last batch (for the trace)
-  Pose2<double> last_pose = src.x0;
-  // With local maps: each trace point's local map and its pose there (smooth_trace), the last one.
-  std::vector<std::pair<int, Pose2<double>>> local_trace;
-  Pose2<double> local_last = src.x0;  // the first map's frame is the world's
-  // The seed (SUBMAP_SEED before each batch) around where the robot was at the last reply (the
-  // world's frame), less the global landmarks the local map holds (`held`, as in process: the filter's
-  // ids). The replies say what it holds: the landmarks carried into it (SUBMAP's flags), the seeds it
-  // took and the landmarks it made, less those POSE names removed. A scan that removed more than
-  // POSE names leaves it unknown until the next map: then nothing is held back and the device
-  // decides (a seed compatible with a landmark it holds is refused, once).
-  if (o.submap_seed && (!global || window != 1)) {
-    throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
-  }
-  Eigen::Vector2d here(src.x0.x, src.x0.y);
-  std::vector<FeatureId> held;
-  bool held_known = true;
-  auto trace_moves = [&](const std::vector<RunInput>& ins) {  // the pose after each prediction
-    for (const RunInput& in : ins) {
-      last_pose = moved(last_pose, in);
-      res.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose});
-      local_last = moved(local_last, in);
-      if (global) local_trace.emplace_back(global->maps(), local_last);
+/// One attempt at a run (stream_once): the device configured and reset, the inputs sent, each scan's
+/// batch sent and its reply scored (up to `window` batches in flight), and with a submap rule the
+/// device's local maps joined on the host into a global map (and, with submap_seed, the local map
+/// seeded from it before each batch).
+class StreamedRun {
+ public:
+  StreamedRun(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so)
+      : link_(link),
+        o_(o),
+        so_(so),
+        caps_(link.capabilities()),
+        device_obs_(std::min<std::size_t>(kLinkMaxObs, caps_.max_observations)),
+        max_obs_(so.max_observations > 0 ? std::min(device_obs_, static_cast<std::size_t>(so.max_observations))
+                                         : device_obs_),
+        scorer_(src.true_landmarks, o.landmark_group),
+        res_(scorer_.result()),
+        window_(static_cast<std::size_t>(std::max(1, so.window))),
+        last_pose_(src.x0),
+        local_last_(src.x0),
+        here_(src.x0.x, src.x0.y) {
+    const proto::Config c = link_config(src.sensor, o);
+    check_capacity(c, caps_);
+    link.configure(c);
+    link.reset(link_reset(src.x0, src.P0));
+    // Sequential map joining: the device's local maps joined on the host (its CONFIG has the rule).
+    ss_ = step_settings(o, src.sensor);
+    const bool maps = ss_.submap_landmarks > 0 || ss_.submap_distance_m > 0 || ss_.submap_scans > 0;
+    global_ = maps ? make_global_map(o, ss_) : nullptr;
+    if (o.submap_seed && (!global_ || window_ != 1)) {
+      throw std::invalid_argument("submap_seed (--submap-seed) needs a submap rule and a window of 1 batch");
     }
-  };
-  auto hand_over = [&]() {
+  }
+
+  /// One input: a relocalisation or a prediction sent as it is, a scan sent as a batch (after its
+  /// seed) and the oldest batch completed when the window is full.
+  void input(RunInput& in) {
+    if (in.relocalise) {
+      link_.relocalise(link_relocalise(in.pose_cov));
+      return;
+    }
+    if (!in.scan) {
+      if (in.increment) {
+        link_.odom_delta(link_odom_delta(in));
+      } else {
+        link_.odometry(link_odometry(in));
+      }
+      if (o_.record_trace) moves_.push_back(in);
+      return;
+    }
+    send_scan(in);
+    if (flight_.size() >= window_) complete();
+  }
+
+  /// The batches still in flight completed, the last local map joined, the result scored.
+  RunResult finish() {
+    while (!flight_.empty()) complete();
+    if (o_.record_trace) trace_moves(moves_);
+    if (global_) {  // the last local map, closed at the end of the inputs, joined too
+      link_.request_submap(map_id_);
+      hand_over();
+    }
+    if (not_augmented_ > 0 && so_.note) {
+      so_.note(std::to_string(not_augmented_) + " observations were not added to the map: the device's map is full (" +
+               std::to_string(caps_.max_landmarks) + " landmarks)");
+    }
+    if (!global_) return scorer_.finish();
+    RunResult out = scorer_.finish();
+    take_global_map(out, *global_, id_truth_);
+    smooth_trace(*global_, local_trace_, out.trace);
+    return out;
+  }
+
+ private:
+  /// The pose after each prediction, into the trace.
+  void trace_moves(const std::vector<RunInput>& ins) {
+    for (const RunInput& in : ins) {
+      last_pose_ = moved(last_pose_, in);
+      res_.trace.push_back({in.increment ? in.t_s : in.t_s + in.dt_s, last_pose_});
+      local_last_ = moved(local_last_, in);
+      if (global_) local_trace_.emplace_back(global_->maps(), local_last_);
+    }
+  }
+
+  /// The device's local map received and joined into the global map.
+  void hand_over() {
     const auto t0 = std::chrono::steady_clock::now();
-    const LinkClient::WireSubmap w = link.receive_submap(map_id);
-    const Submap m = submap_from_wire(w, static_cast<int>(map_id));
+    const LinkClient::WireSubmap w = link_.receive_submap(map_id_);
+    const Submap m = submap_from_wire(w, static_cast<int>(map_id_));
     for (FeatureId id : m.ids) {
       const auto k = static_cast<std::size_t>(id);
-      if (k >= id_truth.size()) id_truth.resize(k + 1, RunScorer::kUnknown);
-      id_truth[k] = scorer.truth_of(id);
+      if (k >= id_truth_.size()) id_truth_.resize(k + 1, RunScorer::kUnknown);
+      id_truth_[k] = scorer_.truth_of(id);
     }
     // The step's cost is not timed through a link (round trips are not steps): the device reports
     // its instruction counts in STATS (geojcbb_qemu --budget gives each local map's largest step).
-    record_join(res.submaps, global->join(m), *global, last_t, id_truth, o.landmark_group, 0.0);
-    res.submaps.frames += w.frames;
-    res.submaps.requests += w.requests;
-    link.submap_received(map_id++);
-    held = global->carried_ids();  // the next map begins with the carried ones
-    held_known = true;
-    res.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  };
+    record_join(res_.submaps, global_->join(m), *global_, last_t_, id_truth_, o_.landmark_group, 0.0);
+    res_.submaps.frames += w.frames;
+    res_.submaps.requests += w.requests;
+    link_.submap_received(map_id_++);
+    held_ = global_->carried_ids();  // the next map begins with the carried ones
+    held_known_ = true;
+    res_.submaps.handover_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
 
-  // The seed of the current local map before a batch: the global map's offer, the device's answer.
-  auto seed_map = [&]() {
+  /// The seed of the current local map before a batch: the global map's offer, the device's answer.
+  void seed_map() {
     static const std::vector<FeatureId> kNone;
     const Seed seed =
-        global->seed(here, ss.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), held_known ? held : kNone);
+        global_->seed(here_, ss_.local_radius_m, static_cast<int>(proto::kSeedsPerFrame), held_known_ ? held_ : kNone);
     if (seed.first_ids.empty()) return;
     proto::SubmapSeed m;
-    m.batch_id = next_batch++;
-    m.map_id = map_id;
+    m.batch_id = next_batch_++;
+    m.map_id = map_id_;
     m.count = static_cast<std::uint8_t>(seed.first_ids.size());
     for (std::size_t k = 0; k < m.count; ++k) {
       const auto q = 2 * static_cast<Eigen::Index>(k);
@@ -293,127 +327,142 @@ RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const
                     static_cast<float>(seed.P(q + 1, q + 1)),
                     static_cast<float>(seed.exist_nats[k])};
     }
-    link.send_seed(m);
-    const LinkAssocResult a = link.receive_seed(m.batch_id);
+    link_.send_seed(m);
+    const LinkAssocResult a = link_.receive_seed(m.batch_id);
     if (a.count != m.count) throw LinkError("the answer to seed " + std::to_string(m.batch_id) + " has another count");
     std::vector<FeatureId> ids(m.count);
     for (std::size_t k = 0; k < m.count; ++k) {
       ids[k] = a.pairs[k].feature_id;
       if (ids[k] < 0) continue;
-      held.push_back(ids[k]);
+      held_.push_back(ids[k]);
       const auto first = static_cast<std::size_t>(seed.first_ids[k]);
-      scorer.added(ids[k], first < id_truth.size() ? id_truth[first] : RunScorer::kUnknown);
+      scorer_.added(ids[k], first < id_truth_.size() ? id_truth_[first] : RunScorer::kUnknown);
     }
-    res.submaps.seeded += static_cast<int>(std::count_if(ids.begin(), ids.end(), [](FeatureId id) { return id >= 0; }));
-    global->seeded(seed, ids);
-  };
+    res_.submaps.seeded +=
+        static_cast<int>(std::count_if(ids.begin(), ids.end(), [](FeatureId id) { return id >= 0; }));
+    global_->seeded(seed, ids);
+  }
 
-  auto complete = [&]() {
-    InFlight& f = flight.front();
-    const LinkClient::ScanReply r = link.receive_scan(f.batch.batch_id);
-    res.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - f.sent).count();
+  /// A scan's batch (its nearest observations the device takes) sent, after its seed.
+  void send_scan(RunInput& in) {
+    InFlight f;
+    f.batch = link_batch(in.observations, 0, max_obs_, f.truth);  // numbered after its seed
+    const int dropped = static_cast<int>(in.observations.size()) - static_cast<int>(f.batch.count);
+    if (dropped > 0) {
+      res_.dropped_observations += dropped;
+      if (!noted_truncation_ && so_.note && device_obs_ < kLinkMaxObs && max_obs_ == device_obs_) {
+        so_.note("the device takes at most " + std::to_string(max_obs_) +
+                 " observations per scan: the nearest are sent, the rest dropped (counted)");
+      }
+      noted_truncation_ = true;
+    }
+    f.t_s = in.t_s;
+    f.moves = std::move(moves_);
+    moves_.clear();
+    f.have_truth = in.have_truth;
+    f.true_pose = in.true_pose;
+    if (o_.submap_seed) seed_map();
+    f.batch.batch_id = next_batch_++;
+    f.sent = std::chrono::steady_clock::now();
+    link_.send_scan(f.batch);
+    flight_.push_back(std::move(f));
+  }
+
+  /// The oldest batch's reply: its pairings scored, new landmarks and removals tracked, the pose (in
+  /// the world's frame) scored and traced, and a local map the device closed joined.
+  void complete() {
+    InFlight& f = flight_.front();
+    const LinkClient::ScanReply r = link_.receive_scan(f.batch.batch_id);
+    res_.association_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - f.sent).count();
     if (r.result.count != f.batch.count || r.result.batch_id != f.batch.batch_id ||
         r.pose.batch_id != f.batch.batch_id) {
       throw LinkError("reply does not match batch " + std::to_string(f.batch.batch_id));
     }
-    ++res.scans;
-    paired.clear();
+    ++res_.scans;
+    paired_.clear();
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
-      paired.push_back(q.outcome == proto::PairingOutcome::kPaired ? q.feature_id : -1);
+      paired_.push_back(q.outcome == proto::PairingOutcome::kPaired ? q.feature_id : -1);
     }
-    scorer.score(f.truth, paired);
+    scorer_.score(f.truth, paired_);
     for (std::size_t i = 0; i < f.batch.count; ++i) {
       const proto::PairingWire& q = r.result.pairs[i];
       if (q.outcome == proto::PairingOutcome::kNewLandmark) {
-        scorer.added(q.feature_id, f.truth[i]);
-        held.push_back(q.feature_id);
+        scorer_.added(q.feature_id, f.truth[i]);
+        held_.push_back(q.feature_id);
       }
-      not_augmented += q.outcome == proto::PairingOutcome::kNotAugmented;
+      not_augmented_ += q.outcome == proto::PairingOutcome::kNotAugmented;
     }
     const auto& u = r.pose.cov_upper;
     Eigen::Matrix3d P;
     P << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5];
     Pose2<double> x{r.pose.x_m, r.pose.y_m, r.pose.theta_rad};
     const Pose2<double> x_local = x;
-    if (global) global->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
-    here = Eigen::Vector2d(x.x, x.y);
-    held_known = held_known && r.pose.removed == r.pose.count;
+    if (global_) global_->to_global(Pose2<double>(x), Eigen::Matrix3d(P), x, P);  // the world's
+    here_ = Eigen::Vector2d(x.x, x.y);
+    held_known_ = held_known_ && r.pose.removed == r.pose.count;
     for (std::size_t k = 0; k < r.pose.count; ++k) {
-      held.erase(std::remove(held.begin(), held.end(), r.pose.ids[k].feature_id), held.end());
+      held_.erase(std::remove(held_.begin(), held_.end(), r.pose.ids[k].feature_id), held_.end());
     }
-    if (f.have_truth) scorer.pose(f.t_s, f.true_pose, x, P);
-    if (o.record_trace) {
+    if (f.have_truth) scorer_.pose(f.t_s, f.true_pose, x, P);
+    if (o_.record_trace) {
       trace_moves(f.moves);
-      res.trace.push_back({f.t_s, x});
-      if (global) local_trace.emplace_back(global->maps(), x_local);
+      res_.trace.push_back({f.t_s, x});
+      if (global_) local_trace_.emplace_back(global_->maps(), x_local);
     }
-    local_last = x_local;
-    last_pose = x;
-    res.landmarks = r.pose.landmark_count;
-    last_t = f.t_s;
+    local_last_ = x_local;
+    last_pose_ = x;
+    res_.landmarks = r.pose.landmark_count;
+    last_t_ = f.t_s;
     if (r.pose.submap_frames > 0) {  // before the hook, which may ask for STATS
-      if (!global) throw LinkError("the device handed over a local map, but this run has no submap rule");
+      if (!global_) throw LinkError("the device handed over a local map, but this run has no submap rule");
       hand_over();
-      local_last = Pose2<double>{0, 0, 0};  // the next map begins here
+      local_last_ = Pose2<double>{0, 0, 0};  // the next map begins here
     }
-    if (so.hook) so.hook(f.batch, r);
-    flight.pop_front();
-  };
+    if (so_.hook) so_.hook(f.batch, r);
+    flight_.pop_front();
+  }
 
+  ScanLink& link_;
+  const RunOptions& o_;
+  const StreamOptions& so_;
+  const proto::Capabilities& caps_;
+  const std::size_t device_obs_, max_obs_;
+  RunScorer scorer_;
+  RunResult& res_;
+  const std::size_t window_;
+  std::deque<InFlight> flight_;
+  std::vector<FeatureId> paired_;
+  bool noted_truncation_ = false;
+  int not_augmented_ = 0;
+  std::uint32_t next_batch_ = 0;
+  StepSettings<double> ss_;
+  std::unique_ptr<GlobalMap> global_;
+  std::vector<int> id_truth_;  // landmark id -> its truth
+  std::uint32_t map_id_ = 0;
+  double last_t_ = 0;            // the last answered scan's time (a join's)
+  std::vector<RunInput> moves_;  // predictions since the last batch (for the trace)
+  Pose2<double> last_pose_;
+  // With local maps: each trace point's local map and its pose there (smooth_trace), the last one.
+  std::vector<std::pair<int, Pose2<double>>> local_trace_;
+  Pose2<double> local_last_;  // the first map's frame is the world's
+  // The seed (SUBMAP_SEED before each batch) around where the robot was at the last reply (the
+  // world's frame), less the global landmarks the local map holds (`held`, as in process: the filter's
+  // ids). The replies say what it holds: the landmarks carried into it (SUBMAP's flags), the seeds it
+  // took and the landmarks it made, less those POSE names removed. A scan that removed more than
+  // POSE names leaves it unknown until the next map: then nothing is held back and the device
+  // decides (a seed compatible with a landmark it holds is refused, once).
+  Eigen::Vector2d here_;
+  std::vector<FeatureId> held_;
+  bool held_known_ = true;
+};
+
+/// One attempt at a run: throws LinkError kRestart when the link asks for a new start.
+RunResult stream_once(ScanLink& link, RunSource& src, const RunOptions& o, const StreamOptions& so) {
+  StreamedRun run(link, src, o, so);
   RunInput in;
-  while (src.next(in)) {
-    if (in.relocalise) {
-      link.relocalise(link_relocalise(in.pose_cov));
-      continue;
-    }
-    if (!in.scan) {
-      if (in.increment) {
-        link.odom_delta(link_odom_delta(in));
-      } else {
-        link.odometry(link_odometry(in));
-      }
-      if (o.record_trace) moves.push_back(in);
-      continue;
-    }
-    InFlight f;
-    f.batch = link_batch(in.observations, 0, max_obs, f.truth);  // numbered after its seed
-    const int dropped = static_cast<int>(in.observations.size()) - static_cast<int>(f.batch.count);
-    if (dropped > 0) {
-      res.dropped_observations += dropped;
-      if (!noted_truncation && so.note && device_obs < kLinkMaxObs && max_obs == device_obs) {
-        so.note("the device takes at most " + std::to_string(max_obs) +
-                " observations per scan: the nearest are sent, the rest dropped (counted)");
-      }
-      noted_truncation = true;
-    }
-    f.t_s = in.t_s;
-    f.moves = std::move(moves);
-    moves.clear();
-    f.have_truth = in.have_truth;
-    f.true_pose = in.true_pose;
-    if (o.submap_seed) seed_map();
-    f.batch.batch_id = next_batch++;
-    f.sent = std::chrono::steady_clock::now();
-    link.send_scan(f.batch);
-    flight.push_back(std::move(f));
-    if (flight.size() >= window) complete();
-  }
-  while (!flight.empty()) complete();
-  if (o.record_trace) trace_moves(moves);
-  if (global) {  // the last local map, closed at the end of the inputs, joined too
-    link.request_submap(map_id);
-    hand_over();
-  }
-  if (not_augmented > 0 && so.note) {
-    so.note(std::to_string(not_augmented) + " observations were not added to the map: the device's map is full (" +
-            std::to_string(caps.max_landmarks) + " landmarks)");
-  }
-  if (!global) return scorer.finish();
-  RunResult out = scorer.finish();
-  take_global_map(out, *global, id_truth);
-  smooth_trace(*global, local_trace, out.trace);
-  return out;
+  while (src.next(in)) run.input(in);
+  return run.finish();
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // The MRCLAM report's split of the other robots' false pairs by how far the robot moved
-// (host_tools/eval/mover_motion.hpp) on hand-made cases: the world-frame noise against finite
+// (host_tools/runs/mover_motion.hpp) on hand-made cases: the world-frame noise against finite
 // differences, the buckets, and the observer fed scans as the run loop reports them.
 #include <doctest/doctest.h>
 

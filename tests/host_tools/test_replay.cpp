@@ -1,4 +1,4 @@
-// The own-log replay (host_tools/eval/event_log.hpp, docs/replay.md): the converted MRCLAM log
+// The own-log replay (host_tools/datasets/event_log.hpp, docs/replay.md): the converted MRCLAM log
 // replays to the MRCLAM replay's results exactly, the reader names the file, line and reason of
 // every malformed line, and a log round-trips through the writer bit for bit.
 #include <doctest/doctest.h>

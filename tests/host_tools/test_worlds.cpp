@@ -1,5 +1,5 @@
 // Generated worlds (host_tools/sim/worlds.hpp) and the robust preset's non-inferiority table
-// (host_tools/eval/worlds_table.hpp): a world is the same for the same (family, seed) and written
+// (host_tools/report/worlds_table.hpp): a world is the same for the same (family, seed) and written
 // so that load_scenario reads it back unchanged; the table counts worse and recovered worlds by
 // the stated rule.
 #include <doctest/doctest.h>

@@ -1,5 +1,5 @@
 // node: one EKF-SLAM step with data association, the unit of work of the device loop and of the
-// host's evaluation (host_tools/eval), so both run the same code. step() is the one orchestrator:
+// host's evaluation (host_tools/runs), so both run the same code. step() is the one orchestrator:
 //   predict(odometry)  ...  step(scan):
 //     relocaliser (lost: align, nothing else) -> predict_local(r + d) -> associate (strategy, or the
 //     caller's override) -> [tentative] -> loop check -> [clusters first] -> hypothesis window ->

@@ -1,8 +1,9 @@
 // host_tools/eval: geojcbb_eval's command line. Each subcommand is one file (eval_sim.cpp,
 // eval_mrclam.cpp, eval_replay.cpp, eval_convert.cpp) that adds its options and returns what it
-// runs; eval_main.cpp only registers them and runs the one given. The flags the subcommands share
-// (strategies, TRUTH, output folder, threads, progress, figures, the device link, the noise) are
-// defined once here, with the run options of the table (run_cli.hpp).
+// runs (host_tools/suites and host_tools/datasets do the work); eval_main.cpp only registers them
+// and runs the one given. The flags the subcommands share (strategies, TRUTH, output folder,
+// threads, progress, figures, the device link, the noise) are defined once here, with the run
+// options of the table (run_cli.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,7 @@
 #include "geojcbb_host/link_cli.hpp"
 #include "geojcbb_host/mrclam_replay.hpp"
 #include "geojcbb_host/slam_run.hpp"
+#include "geojcbb_host/suite.hpp"
 
 namespace geojcbb::host {
 
@@ -28,15 +30,10 @@ Subcommand add_replay_command(CLI::App& app);
 Subcommand add_convert_mrclam_command(CLI::App& app);
 Subcommand add_convert_victoria_command(CLI::App& app);
 
-/// The flags a subcommand that runs presets shares with the others.
-struct CommonFlags {
-  std::vector<std::string> strategies;  ///< --strategies (empty: the six papers' presets, PCJCBB and PCJCBB+RL)
-  bool oracle = false;                  ///< --truth
-  std::string out_dir;                  ///< --out-dir (its default: the value held)
-  int jobs = 0;                         ///< --jobs (0: the number of cores)
-  bool progress = true;                 ///< --no-progress clears it (and a stderr that is no terminal)
-  bool svg = true;                      ///< --no-svg clears it
-  LinkCli link;                         ///< --port, --device and the link's options
+/// The flags a subcommand that runs presets shares with the others: the suite's (suite.hpp) and
+/// the device link's.
+struct CommonFlags : SuiteFlags {
+  LinkCli link;  ///< --port, --device and the link's options
 };
 
 /// Which of CommonFlags a subcommand takes.

@@ -1,4 +1,4 @@
-// host_tools/eval: the SVG chart writer (svg_plot.hpp). Text widths are estimated (0.6 em per
+// host_tools/report: the SVG chart writer (svg_plot.hpp). Text widths are estimated (0.6 em per
 // character of sans-serif) to size margins, the legend and the label rotation.
 #include "geojcbb_host/svg_plot.hpp"
 

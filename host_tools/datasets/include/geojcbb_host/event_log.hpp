@@ -1,4 +1,4 @@
-// host_tools/eval: a robot's own log in one documented format (docs/replay.md), its reader and
+// host_tools/datasets: a robot's own log in one documented format (docs/replay.md), its reader and
 // writer, the run inputs it gives the filter (LogSource), the noise estimated from its labelled
 // data, and the converter from a MRCLAM robot. One line per event, CSV, the first field the kind:
 //   meta,KEY,VALUE                                    sensor, start pose, scan grouping

@@ -1,4 +1,4 @@
-// host_tools/eval: ACFR's Victoria Park (Guivant and Nebot 2001) as a log of docs/replay.md's
+// host_tools/datasets: ACFR's Victoria Park (Guivant and Nebot 2001) as a log of docs/replay.md's
 // format. The data (README.md, "Data"): odometry at 40 Hz (the rear left wheel's speed and the
 // steering angle), the tree detections of ACFR's detector per laser frame, GPS. No labels: a
 // replay is scored by GPS, the landmarks mapped and the NIS.

@@ -1,4 +1,4 @@
-// host_tools/eval: the simulator's and the recorded inputs of a run (run_source.hpp).
+// host_tools/runs: the simulator's and the recorded inputs of a run (run_source.hpp).
 #include "geojcbb_host/run_source.hpp"
 
 #include <cmath>

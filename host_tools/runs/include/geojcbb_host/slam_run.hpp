@@ -1,4 +1,4 @@
-// host_tools/eval: one EKF-SLAM run with a chosen association strategy: the run's options and
+// host_tools/runs: one EKF-SLAM run with a chosen association strategy: the run's options and
 // presets (RunOptions, Method), the in-process session (SlamSession, node::SlamStep underneath) and
 // run_inputs, which feeds it a source's inputs. The scorer is run_score.hpp's, the sources
 // (simulator, recorded logs) run_source.hpp's.

@@ -1,4 +1,4 @@
-// host_tools/eval: scoring a run without a true pose against GPS (a real vehicle's log, e.g.
+// host_tools/datasets: scoring a run without a true pose against GPS (a real vehicle's log, e.g.
 // Victoria Park). Fixes are screened first (a receiver that reacquires after a dropout, or jumps,
 // gives fixes that are off by metres): a fix more than max_gap_s after the previous fix, or more
 // than max_jump_m from it, is rejected. Each kept fix is compared with the estimated antenna

@@ -1,4 +1,4 @@
-// host_tools/eval: the world model's figures (world_model_report.hpp).
+// host_tools/report: the world model's figures (world_model_report.hpp).
 #include "geojcbb_host/world_model_report.hpp"
 
 #include <algorithm>

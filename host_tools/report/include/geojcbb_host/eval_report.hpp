@@ -1,4 +1,4 @@
-// host_tools/eval: the evaluation's report pieces shared by the simulation and
+// host_tools/report: the evaluation's report pieces shared by the simulation and
 // the MRCLAM replay: one row per strategy (sums over runs), the papers' Table 1
 // (time) and Table 2 (accuracy) as text, the same rows as JSON, a progress bar
 // on stderr, and a chi-square quantile for large dof.

@@ -1,4 +1,4 @@
-// host_tools/eval: the inputs of a run, in time order (predictions and scans), from the simulator
+// host_tools/runs: the inputs of a run, in time order (predictions and scans), from the simulator
 // (SimSource) or held in memory (RecordedSource: a log's, or another source's recorded), with the
 // sensor and the start the filter is given; fed to the in-process session (slam_run.hpp) or streamed
 // to a device (host_tools/link).

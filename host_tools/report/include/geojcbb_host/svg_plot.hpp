@@ -1,4 +1,4 @@
-// host_tools/eval: a small, dependency-free SVG 1.1 chart writer for the
+// host_tools/report: a small, dependency-free SVG 1.1 chart writer for the
 // evaluation's figures.
 //   Figure    a grid of x-y panels (paths, landmarks, errors over time),
 //   optionally with equal aspect

@@ -1,4 +1,4 @@
-// host_tools/eval: the one reporting path of the simulation, the MRCLAM replay and the own-log
+// host_tools/report: the one reporting path of the simulation, the MRCLAM replay and the own-log
 // replay. A RunAggregate sums one row's runs (a strategy on a scenario, a dataset or a log) and
 // gives its ReportRow (eval_report.hpp prints the tables and the JSON rows); run_csv writes a
 // run's CSV fields by column name; print_summary prints the per-strategy summary (F1, map, ANEES,

@@ -1,4 +1,4 @@
-// host_tools/eval: the scoring of one run (run_score.hpp).
+// host_tools/runs: the scoring of one run (run_score.hpp).
 #include "geojcbb_host/run_score.hpp"
 
 #include <Eigen/Dense>

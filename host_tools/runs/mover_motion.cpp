@@ -1,4 +1,4 @@
-// host_tools/eval: the other robots' false pairs by how far the robot moved (mover_motion.hpp).
+// host_tools/runs: the other robots' false pairs by how far the robot moved (mover_motion.hpp).
 #include "geojcbb_host/mover_motion.hpp"
 
 #include <Eigen/Dense>

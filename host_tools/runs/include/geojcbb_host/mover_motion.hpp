@@ -1,4 +1,4 @@
-// host_tools/eval: the MRCLAM report's split of the false pairs with other robots by how far the
+// host_tools/runs: the MRCLAM report's split of the false pairs with other robots by how far the
 // observed robot had moved since the landmark it was paired with was made (docs/mrclam.md, "The
 // other robots' false pairs by motion").
 //

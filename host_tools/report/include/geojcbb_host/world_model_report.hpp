@@ -1,4 +1,4 @@
-// host_tools/eval: the world model's figures in the reports (docs/design.md, "The world model"):
+// host_tools/report: the world model's figures in the reports (docs/design.md, "The world model"):
 // per strategy the landmarks that became movers, the clutter density and p_D per range bin the
 // filter learned (learn_clutter, learn_detection; the mean over runs), and, where the data is
 // labelled, p_D as the labels give it (labelled_detection).

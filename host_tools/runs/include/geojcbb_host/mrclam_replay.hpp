@@ -1,4 +1,4 @@
-// host_tools/eval: EKF-SLAM on the UTIAS MRCLAM real data (docs/mrclam.md),
+// host_tools/runs: EKF-SLAM on the UTIAS MRCLAM real data (docs/mrclam.md),
 // scored like the simulation. One run = one robot of one dataset with one
 // strategy:
 //   - start at the ground-truth pose at the first time both odometry and ground
@@ -140,9 +140,5 @@ struct MrclamOptions {
   /// and of the batch with the labels. Empty: no batch.
   std::function<std::array<double, 3>(RunSource&, const ScanRecorder&, const RunResult&, const RunOptions&)> batch;
 };
-
-/// Every strategy on every robot of every dataset: tables on stdout, mrclam.csv
-/// and mrclam.json in out_dir. Returns the process exit code.
-int run_mrclam_report(const MrclamOptions& options, const std::string& out_dir, bool progress);
 
 }  // namespace geojcbb::host

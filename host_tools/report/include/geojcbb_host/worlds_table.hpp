@@ -1,4 +1,4 @@
-// host_tools/eval: the robust preset against its base on generated worlds (issue 36's
+// host_tools/report: the robust preset against its base on generated worlds (the
 // non-inferiority table). Per world, the robust preset (PCJCBB+RL) is *worse* than its base
 // (PCJCBB) when its pose error passes the base's by more than max(0.5 m, 20 %) or its F1 is below
 // the base's by more than 0.005; the base *diverged and the robust preset recovered* when the base's

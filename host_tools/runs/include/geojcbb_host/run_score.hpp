@@ -1,4 +1,4 @@
-// host_tools/eval: the scoring of one EKF-SLAM run (the in-process session's and a device's), against the simulator's ground truth with the
+// host_tools/runs: the scoring of one EKF-SLAM run (the in-process session's and a device's), against the simulator's ground truth with the
 // papers' definitions (2019 paper, eqs. 15-19):
 //   TP  a pair whose map feature was initialised from the observation's true
 //   landmark FP  any other pair (wrong feature, or clutter paired) FN  an

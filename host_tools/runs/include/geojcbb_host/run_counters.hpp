@@ -1,4 +1,4 @@
-// host_tools/eval: the counters of an evaluated run, described once (an X-macro, as the option
+// host_tools/runs: the counters of an evaluated run, described once (an X-macro, as the option
 // table core/options.h is for the settings).
 #pragma once
 
