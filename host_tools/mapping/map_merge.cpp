@@ -1,4 +1,4 @@
-// host_tools/eval: several robots' maps merged with unknown start poses (map_merge.hpp).
+// host_tools/mapping: several robots' maps merged with unknown start poses (map_merge.hpp).
 #include "geojcbb_host/map_merge.hpp"
 
 #include <Eigen/Cholesky>
@@ -12,6 +12,7 @@
 #include "geojcbb/core/chi_square.hpp"
 #include "geojcbb/core/math.hpp"
 #include "geojcbb/reloc/align.hpp"
+#include "geojcbb_host/fusion.hpp"
 
 namespace geojcbb::host {
 
@@ -145,34 +146,34 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
           std::string(d);
       continue;
     }
-    // 2. The pairs' joint test with the full covariance: refused when they fail.
+    // 2. The pairs' joint test with the full covariance: refused when they fail. X = [M, L'] (the
+    // maps are independent), the pairs' constraints l'_i - m_j = 0 (fusion.hpp, as the join's).
     Eigen::VectorXd l;
     Eigen::MatrixXd Pl;
     transformed(b, a.pose, a.cov, l, Pl);
-    std::vector<std::pair<int, int>> pairs;  // (b's landmark, merged landmark)
+    std::vector<std::pair<int, int>> pairs, rows;  // (b's landmark, merged landmark); their rows in X
     for (int i = 0; i < n; ++i) {
-      if (a.landmark[static_cast<std::size_t>(i)] >= 0) pairs.emplace_back(i, a.landmark[static_cast<std::size_t>(i)]);
+      const int j = a.landmark[static_cast<std::size_t>(i)];
+      if (j < 0) continue;
+      pairs.emplace_back(i, j);
+      rows.emplace_back(2 * N + 2 * i, 2 * j);
     }
-    // The pairs' constraints jointly: nu = l'_i - m_j, S = P'_ii' + P_jj' (the maps are independent).
-    const int np = static_cast<int>(pairs.size());
-    Eigen::VectorXd nu(2 * np);
-    Eigen::MatrixXd S(2 * np, 2 * np);
-    for (int u = 0; u < np; ++u) {
-      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
-      nu.segment<2>(2 * u) = l.segment<2>(2 * iu) - res.landmarks[static_cast<std::size_t>(ju)];
-      for (int v = 0; v < np; ++v) {
-        const auto [iv, jv] = pairs[static_cast<std::size_t>(v)];
-        S.block<2, 2>(2 * u, 2 * v) = Pl.block<2, 2>(2 * iu, 2 * iv) + res.P.block<2, 2>(2 * ju, 2 * jv);
-      }
-    }
-    const double d2 = nu.dot(Eigen::LDLT<Eigen::MatrixXd>(S).solve(nu));
+    const int p = static_cast<int>(pairs.size());
+    Eigen::VectorXd X(2 * N + 2 * n);
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(X.size(), X.size());
+    for (int j = 0; j < N; ++j) X.segment<2>(2 * j) = res.landmarks[static_cast<std::size_t>(j)];
+    X.tail(2 * n) = l;
+    P.topLeftCorner(2 * N, 2 * N) = res.P;
+    P.bottomRightCorner(2 * n, 2 * n) = Pl;
+    const SamePoints c = same_points(rows, X, P, o.constraint_var_m2);
+    std::vector<int> all(static_cast<std::size_t>(p));
+    for (int u = 0; u < p; ++u) all[static_cast<std::size_t>(u)] = u;
+    const double d2 = joint_d2(c, all);
     double limit = 0;
-    if (chi2_inv(o.confidence, 2 * static_cast<int>(pairs.size()), limit) != Status::kOk)
-      throw std::runtime_error("merge: chi2");
+    if (chi2_inv(o.confidence, 2 * p, limit) != Status::kOk) throw std::runtime_error("merge: chi2");
     if (!(d2 <= limit)) {  // refused, not pruned into agreement: a subset of any pairing passes
       char d[120];
-      std::snprintf(d, sizeof d, "the alignment's %zu pairs are not jointly compatible (d2 %.1f > %.1f)", pairs.size(),
-                    d2, limit);
+      std::snprintf(d, sizeof d, "the alignment's %d pairs are not jointly compatible (d2 %.1f > %.1f)", p, d2, limit);
       res.why.back() = d;
       continue;
     }
@@ -182,36 +183,18 @@ MergeResult merge_maps(const std::vector<RobotMap>& maps, const MergeOptions& o)
       res.why.back() = "ambiguous pairs: under the alignment's uncertainty " + why;
       continue;
     }
-    // 4. Fusion: X = [M, L'] (independent maps), the constraints as one update, the paired rows of L'
-    // dropped.
-    const int p = static_cast<int>(pairs.size());
-    const int D = 2 * N + 2 * n;
-    Eigen::VectorXd X(D);
-    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D, D);
-    for (int j = 0; j < N; ++j) X.segment<2>(2 * j) = res.landmarks[static_cast<std::size_t>(j)];
-    X.tail(2 * n) = l;
-    P.topLeftCorner(2 * N, 2 * N) = res.P;
-    P.bottomRightCorner(2 * n, 2 * n) = Pl;
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * p, D);
-    for (int u = 0; u < p; ++u) {
-      const auto [iu, ju] = pairs[static_cast<std::size_t>(u)];
-      H.block<2, 2>(2 * u, 2 * N + 2 * iu) = Eigen::Matrix2d::Identity();
-      H.block<2, 2>(2 * u, 2 * ju) = -Eigen::Matrix2d::Identity();
+    // 4. Fusion: the constraints as one update, the paired rows of L' dropped.
+    if (!fuse_same_points(c, all, X, P)) throw std::runtime_error("merge: constraints not positive definite");
+    std::vector<bool> paired(static_cast<std::size_t>(n), false);
+    for (const auto& [iu, ju] : pairs) {
+      paired[static_cast<std::size_t>(iu)] = true;
       const int tb = b.truth[static_cast<std::size_t>(iu)], tm = res.truth[static_cast<std::size_t>(ju)];
       res.wrong += tb >= 0 && tm >= 0 && tb != tm;
       if (tm < 0) res.truth[static_cast<std::size_t>(ju)] = tb;
     }
-    const Eigen::MatrixXd PHt = P * H.transpose();
-    const Eigen::MatrixXd Sc = H * PHt + o.constraint_var_m2 * Eigen::MatrixXd::Identity(2 * p, 2 * p);
-    const Eigen::LDLT<Eigen::MatrixXd> f(Sc);
-    X -= PHt * f.solve(H * X);
-    P -= PHt * f.solve(PHt.transpose());
-    P = (0.5 * (P + P.transpose())).eval();
     std::vector<int> keep;  // rows of X kept: the merged map's, then b's unpaired landmarks
     keep.reserve(static_cast<std::size_t>(N) + static_cast<std::size_t>(n));
     for (int j = 0; j < N; ++j) keep.push_back(j);
-    std::vector<bool> paired(static_cast<std::size_t>(n), false);
-    for (const auto& q : pairs) paired[static_cast<std::size_t>(q.first)] = true;
     for (int i = 0; i < n; ++i) {
       if (!paired[static_cast<std::size_t>(i)]) keep.push_back(N + i);
     }

@@ -1,4 +1,4 @@
-// host_tools/eval: maps of several robots merged into one when their relative start poses are
+// host_tools/mapping: maps of several robots merged into one when their relative start poses are
 // unknown (docs/submaps.md, "Several robots, one map"). Each robot's map is in its own frame (its
 // start pose). The first map is the merged map's frame; each further map is
 //   1. aligned pose-free: its landmarks, as range-bearing "observations" from its origin with their
