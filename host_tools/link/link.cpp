@@ -305,9 +305,22 @@ proto::Stats LinkClient::stats() {
   return wait_for<proto::Stats>("STATS");
 }
 
+proto::DecoderCounters LinkClient::frame_counters() const {
+  const proto::DecoderCounters& c = dec_.counters();
+  proto::DecoderCounters s;
+  s.frames_ok = past_.frames_ok + c.frames_ok;
+  s.bad_crc = past_.bad_crc + c.bad_crc;
+  s.bad_length = past_.bad_length + c.bad_length;
+  s.overrun = past_.overrun + c.overrun;
+  s.bad_version = past_.bad_version + c.bad_version;
+  s.bad_flags = past_.bad_flags + c.bad_flags;
+  return s;
+}
+
 void LinkClient::attach(Transport& t) {
   t_ = &t;
   queue_.clear();
+  past_ = frame_counters();
   dec_ = proto::Decoder{};
   error_floor_ = seq_;
 }

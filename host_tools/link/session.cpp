@@ -90,7 +90,7 @@ void LinkSession::restart(const std::string& why) {
 
 template <class Op>
 auto LinkSession::guarded(const char* what, bool in_run, Op&& op) -> decltype(op()) {
-  bool resend = false;
+  bool resend = false, lost = false;
   for (int attempt = 0;; ++attempt) {
     std::string why;
     bool not_ready = false;
@@ -99,8 +99,17 @@ auto LinkSession::guarded(const char* what, bool in_run, Op&& op) -> decltype(op
       resend = false;
       return op();
     } catch (const LinkError& e) {
-      if (e.kind == LinkError::Kind::kLost && in_run) restart(e.what());
-      if (e.kind != LinkError::Kind::kTimeout && e.kind != LinkError::Kind::kNotReady) throw;
+      // A reply missing (its frame damaged or dropped on the way, e.g. the ASSOC_RESULT before its
+      // POSE) may be the last batch's, which the device sends again when the batch is resent: so
+      // reconnect and resend once. Missing again, it is gone for good.
+      if (e.kind == LinkError::Kind::kLost && (!in_run || lost)) {
+        if (in_run) restart(e.what());
+        throw;
+      }
+      lost = lost || e.kind == LinkError::Kind::kLost;
+      if (e.kind != LinkError::Kind::kTimeout && e.kind != LinkError::Kind::kNotReady &&
+          e.kind != LinkError::Kind::kLost)
+        throw;
       not_ready = e.kind == LinkError::Kind::kNotReady;
       why = e.what();
     } catch (const std::runtime_error& e) {  // the transport: the port closed or failed

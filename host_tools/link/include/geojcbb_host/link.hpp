@@ -127,6 +127,9 @@ class LinkClient {
   std::size_t pending_frames() const { return pending_.size(); }
   /// Replies skipped because their batch had been answered already.
   std::uint64_t duplicate_replies() const { return duplicates_; }
+  /// The host's frame decoder's counters (frames taken, and rejected by cause), over every port
+  /// attached: what arrived damaged from the device.
+  proto::DecoderCounters frame_counters() const;
 
  private:
   struct Frame {
@@ -165,6 +168,7 @@ class LinkClient {
   };
   std::deque<Pending> pending_;  ///< stream frames sent and not yet answered
   proto::Decoder dec_;
+  proto::DecoderCounters past_;  ///< the counters of the decoders of ports attached before
   proto::EncodedFrame frame_;
   proto::Capabilities caps_;
   proto::Stats latest_stats_;
