@@ -2,7 +2,7 @@
  * this table (an X-macro, as nanopb's FIELDLIST): the C++ settings struct, its defaults and range
  * checks (core/settings.hpp), the C struct and its defaults (geojcbb.h), the Python keyword
  * arguments, the command-line options of geojcbb_eval and the options table of docs/options.md all
- * come from it. The wire's CONFIG names its own subset (node/node.hpp ties each field to a line here
+ * come from it. The wire's CONFIG names its own subset (node/wire.hpp ties each field to a line here
  * by name, type and default at compile time).
  *
  * X(TYPE, name, default, RANGE, unit, cli, meaning)
@@ -15,7 +15,7 @@
  *   cli      the geojcbb_eval option ("": the host derives the value, see docs/options.md); a BOOL
  *            gets --name and --no-name
  * A new option is one line here and the stage that reads it (plus a CONFIG field if the device
- * takes it: node/node.hpp then refuses to compile until the field is tied to its line). */
+ * takes it: node/wire.hpp then refuses to compile until the field is tied to its line). */
 #ifndef GEOJCBB_CORE_OPTIONS_H
 #define GEOJCBB_CORE_OPTIONS_H
 

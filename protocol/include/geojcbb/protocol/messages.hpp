@@ -47,7 +47,7 @@ enum class MsgType : std::uint8_t {
 };
 
 /// Observations per OBS_BATCH (and pairings per ASSOC_RESULT) by default: DefaultBounds' 24
-/// (node/node.hpp static_asserts the agreement).
+/// (node/wire.hpp static_asserts the agreement).
 constexpr std::size_t kDefaultMaxObsPerBatch = 24;
 
 /// The schema hash (defined at the end of this file, from every message's description).
@@ -150,7 +150,7 @@ struct Capabilities : Codec<Capabilities> {
   }
 };
 
-/// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/node.hpp static_asserts it).
+/// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/wire.hpp static_asserts it).
 enum class StrategyCode : std::uint8_t {
   kIcnn = 0,
   kJcbb = 1,
@@ -164,7 +164,7 @@ constexpr std::uint8_t kStrategyCodeCount = 7;
 
 /// CONFIG, host -> device (acknowledged): the SLAM step's settings. Each field but
 /// stats_period_scans is an option of firmware_lib's option table (core/options.h) by the same name;
-/// node/node.hpp ties them at compile time (name, type, default), and a host refuses to send work to
+/// node/wire.hpp ties them at compile time (name, type, default), and a host refuses to send work to
 /// a device when a setting it cannot carry differs from its default. Levels and real values travel
 /// as float32. Domain checks only; the device also checks its capacities (groups, node budget) and
 /// every option's range (SlamStep::configure).
@@ -526,11 +526,11 @@ struct ObsBatchT : Codec<ObsBatchT<MaxObs>> {
 using ObsBatch = ObsBatchT<>;
 
 /// Feature ids of ASSOC_RESULT besides map ids (>= 0); geojcbb::kNewFeature and kUnmatched
-/// (node/node.hpp static_asserts the agreement).
+/// (node/wire.hpp static_asserts the agreement).
 constexpr std::int32_t kFeatureNew = -1;        ///< the observation starts a new landmark
 constexpr std::int32_t kFeatureUnmatched = -2;  ///< clutter, or ambiguous: not used
 
-/// What became of an observation (firmware_lib node::Outcome, value for value; node/node.hpp
+/// What became of an observation (firmware_lib node::Outcome, value for value; node/wire.hpp
 /// static_asserts it).
 enum class PairingOutcome : std::uint8_t {
   kPaired = 0,    ///< feature_id: the map landmark it was paired with
