@@ -1,16 +1,20 @@
 // node/wire.hpp's reply to an OBS_BATCH on its own, over results built by hand: to_wire(StepResult)
 // as ASSOC_RESULT (each outcome's feature id by the wire's rule, d2 in float32, the count and batch
 // id) and to_wire(Slam) as POSE (pose, covariance, landmark count, the ids removed, the hand-over's
-// frame count). Both allocate nothing, and what they build is a valid frame.
+// frame count). Both allocate nothing, and what they build is a valid frame. And CONFIG, generated
+// from the option table: one field per option in the table's order, each option through the wire.
 #include <doctest/doctest.h>
 
 #include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
+#include <tuple>
 
 #include "geojcbb/node/wire.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/options.hpp"
 
 using namespace geojcbb;
 
@@ -136,3 +140,52 @@ TEST_CASE_TEMPLATE("wire: the filter after a step as POSE", T, float, double) {
   CHECK(p.submap_frames > 0);
 }
 
+namespace {
+/// The options on which a and b differ, by name ("" when none).
+template <typename T>
+std::string differing(const StepSettings<T>& a, const StepSettings<T>& b) {
+  std::string names;
+  for_each_option_pair(a, b, [&](const options::Info& info, const auto& x, const auto& y) {
+    if (!(x == y)) names += std::string(info.name) + " ";
+  });
+  return names;
+}
+
+template <std::size_t... K>
+void check_field_names(std::index_sequence<K...>) {
+  const std::array<const char*, sizeof...(K)> names{std::get<K>(proto::Config::fields()).name...};
+  for (int k = 0; k < options::kCount; ++k) {
+    CAPTURE(k);
+    CHECK(std::string(names[static_cast<std::size_t>(k)]) == options::kInfo[k].name);
+  }
+  CHECK(std::string(names.back()) == "stats_period_scans");
+}
+}  // namespace
+
+TEST_CASE("wire: CONFIG is the option table, line by line, then the device's own field") {
+  static_assert(node::config_wire::kFieldCount == options::kCount + 1, "one CONFIG field per option, and one more");
+  check_field_names(std::make_index_sequence<node::config_wire::kFieldCount>{});
+}
+
+TEST_CASE("wire: every option of the table round-trips through CONFIG's bytes") {
+  const StepSettings<float> defaults_on_device = node::settings_from<float, B>(proto::Config{});
+  for (int k = 0; k < options::kCount; ++k) {
+    const std::string option = options::kInfo[k].name;
+    CAPTURE(option);
+    const StepSettings<float> s = test::with_other<float>(k);  // this option away from its default
+    REQUIRE(in_range(s));
+    const proto::Config c = node::config_from(s);
+    const proto::Config back = through_the_wire(c);
+    const StepSettings<float> got = node::settings_from<float, B>(back);
+    // What the device runs is what the host's settings say at float32, and only this option differs
+    // from a device left at its defaults.
+    CHECK(differing(got, node::settings_from<float, B>(c)) == "");
+    CHECK(differing(got, defaults_on_device) == option + " ");
+  }
+  // The defaults, and the device's own field.
+  proto::Config c = node::config_from(StepSettings<float>{});
+  c.stats_period_scans = 7;
+  const proto::Config back = through_the_wire(c);
+  CHECK(differing(node::settings_from<float, B>(back), defaults_on_device) == "");
+  CHECK(back.stats_period_scans == 7);
+}

@@ -1,9 +1,9 @@
 // node: the wire and the library side by side. The definitions protocol/ restates (strategy codes,
 // pairing outcomes, feature ids, node budgets, seeds and observations per frame) held equal at compile
-// time; CONFIG tied field by field to the option table (core/options.h) and converted both ways; an
-// OBS_BATCH, ODOMETRY and RESET as the filter's inputs, and a step's result as the device's reply
-// (ASSOC_RESULT, POSE). Used by the Node (node/node.hpp) on the device, and by the host to check and
-// build what it sends. Compile-time checks and O(fields) or
+// time; CONFIG (generated from the option table, core/options.h) converted both ways; an OBS_BATCH,
+// ODOMETRY and RESET as the filter's inputs, and a step's result as the device's reply (ASSOC_RESULT,
+// POSE). Used by the Node (node/node.hpp) on the device, and by the host to check and build what it
+// sends. Compile-time checks and O(fields) or
 // O(observations) conversions; no state.
 #pragma once
 
@@ -55,11 +55,11 @@ static_assert(static_cast<std::size_t>(kMaxSeeds) == proto::kSeedsPerFrame, "SUB
 static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
               "the wire's default batch size is DefaultBounds' observations per scan");
 
-/// CONFIG's fields and the option table (core/options.h): CONFIG keeps its own fields (protocol/ sees
-/// only the standard library); each but the device's own stats_period_scans is an option of the
-/// same name, and the checks below tie them at compile time: the name exists in the table, the wire
-/// type suits the option's TYPE, and CONFIG's default is the table's. The two conversions below
-/// are the only code between the wire and the settings, generated from CONFIG's field list.
+/// CONFIG's fields and the option table (core/options.h): protocol/messages.hpp generates one field
+/// per option from the table, then the device's own stats_period_scans. The checks below state what
+/// that generation must give, at compile time: the name exists in the table, the wire type suits the
+/// option's TYPE, and CONFIG's default is the table's. The two conversions below are the only code
+/// between the wire and the settings, generated from CONFIG's field list.
 namespace config_wire {
 
 constexpr int kFieldCount = static_cast<int>(std::tuple_size<decltype(proto::Config::fields())>::value);
