@@ -69,7 +69,11 @@ typedef enum geojcbb_strategy {
   GEOJCBB_STRATEGY_DFJCBB = 3,
   GEOJCBB_STRATEGY_GEMJCBB = 4,
   GEOJCBB_STRATEGY_GEOJCBB = 5,
-  GEOJCBB_STRATEGY_PCJCBB = 6 /* GEOJCBB + pairwise verify and pose-free seed (docs/consistency.md) */
+  /* JCBB over every candidate (no grouping, no local region) with GEOJCBB's mutual exclusion and optimal
+   * criterion; its answer verified by pose-free pairwise consistency (a maximum clique of pairings whose
+   * pairwise distances agree) and seeded by that clique when the pose is very uncertain
+   * (docs/consistency.md) */
+  GEOJCBB_STRATEGY_PCJCBB = 6
 } geojcbb_strategy;
 
 /* The settings of one SLAM step (association and filter): one member per line of the option table

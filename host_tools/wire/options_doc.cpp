@@ -1,6 +1,6 @@
 // geojcbb_options_doc: docs/options.md's option table, rendered from the option table itself
-// (firmware_lib/include/geojcbb/core/options.h, through core/settings.hpp) and from CONFIG's field
-// list (node/node.hpp: which options a device receives), and the Python stub's option keywords
+// (protocol/include/geojcbb/core/options.h, through core/settings.hpp) and from CONFIG's field
+// list (node/wire.hpp, carried_by_config: which options a device receives), and the Python stub's option keywords
 // (host_tools/python/geojcbb/_core.pyi, class Options; chosen by a FILE ending in .pyi). Each
 // lives between two marker lines.
 //   geojcbb_options_doc                 prints the generated block (the Markdown table)

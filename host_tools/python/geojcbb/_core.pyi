@@ -48,7 +48,7 @@ class Diagnostics(TypedDict):
 
 class Options(TypedDict, total=False):
     """The keyword options of associate() and Slam(), one per line of the option table
-    (firmware_lib/include/geojcbb/core/options.h; docs/options.md gives ranges and meanings).
+    (protocol/include/geojcbb/core/options.h; docs/options.md gives ranges and meanings).
     The keywords are generated from the table (geojcbb_options_doc; CTest options.stub_current)."""
     # BEGIN GENERATED: option keywords (cmake --build build/host-release --target options_docs; do not edit)
     confidence: float  # default 0.99

@@ -59,7 +59,7 @@ TEST_CASE("options: every default is in its range, and the defaults configure a 
 
 TEST_CASE("options: one default per option: the library's, the wire's and the C API's agree") {
   const StepSettings<float> lib;
-  // The wire: CONFIG's defaults are the library's (node.hpp also checks it at compile time) ...
+  // The wire: CONFIG's defaults are the library's (node/wire.hpp also checks it at compile time) ...
   CHECK(payload_of(proto::Config{}) == payload_of(node::config_from(lib)));
   // ... and a default CONFIG configures the device as the library's defaults do (levels at float32).
   const StepSettings<float> wire = node::settings_from<float, DefaultBounds>(proto::Config{});

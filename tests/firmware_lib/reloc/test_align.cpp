@@ -241,7 +241,7 @@ TEST_CASE_TEMPLATE("reloc: a map with two copies of the scene has no unique pose
 
 // The prior (the filter's pose and covariance) decides between look-alike places the scan alone
 // cannot: a copy of the scene 200 m away is no rival to an estimate with a 5 m sigma, and an
-// estimate at the copy finds the copy. Pose-free, the same scan is ambiguous (issue 36).
+// estimate at the copy finds the copy. Pose-free, the same scan is ambiguous (docs/design.md, "Decisions with the prior").
 TEST_CASE_TEMPLATE("reloc: with the pose prior, a look-alike place far from the estimate is no rival", T, float,
                    double) {
   const World w = make_world(3, 30, 0, 1.0);

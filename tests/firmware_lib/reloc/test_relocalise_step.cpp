@@ -63,7 +63,7 @@ TEST_CASE_TEMPLATE("reloc step: a kidnap is found in one scan and confirmed on t
   CHECK(rig->step.localisation() == node::Localisation::kTracking);
 }
 
-// A large covariance is uncertainty, not lost (issue 36): the variance triggers are retired. A long
+// A large covariance is uncertainty, not lost (docs/relocalisation.md): the variance triggers are retired. A long
 // drift's honest covariance (36 m^2 of position variance, past the retired 25 m^2 trigger) keeps the
 // robot tracking, and the association closes the 1.5 m error over the next scans.
 TEST_CASE_TEMPLATE("reloc step: a large but honest covariance keeps the robot tracking", T, float, double) {

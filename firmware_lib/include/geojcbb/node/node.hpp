@@ -288,39 +288,13 @@ class Node {
     budget_hits_ += last_.diag.node_budget_hit ? 1u : 0u;
     ambiguous_scans_ += last_.reloc.ambiguous || last_.loop.ambiguous ? 1u : 0u;
     movers_ += static_cast<std::uint32_t>(last_.review.movers);
-    result_.batch_id = m.batch_id;
-    result_.count = m.count;
-    for (int i = 0; i < last_.count; ++i) {  // <= kMaxObservations
-      proto::PairingWire& q = result_.pairs[static_cast<std::size_t>(i)];
-      q.outcome = static_cast<proto::PairingOutcome>(last_.outcome[i]);
-      const bool has_id = last_.outcome[i] == Outcome::kPaired || last_.outcome[i] == Outcome::kNewLandmark;
-      q.feature_id = has_id ? last_.feature[i]
-                     : last_.outcome[i] == Outcome::kUnmatched || last_.outcome[i] == Outcome::kMover
-                         ? proto::kFeatureUnmatched
-                         : proto::kFeatureNew;
-      q.d2 = static_cast<float>(last_.d2[i]);
-    }
+    to_wire(last_, m.batch_id, result_);
     send(result_);
     applied();
     have_result_ = true;
-    const ekf::Slam<T, B>& s = step_.slam();
-    proto::Pose& p = pose_;
-    p.batch_id = m.batch_id;
-    p.x_m = static_cast<float>(s.x(0));
-    p.y_m = static_cast<float>(s.x(1));
-    p.theta_rad = static_cast<float>(s.x(2));
-    p.cov_upper = {static_cast<float>(s.cov(0, 0)), static_cast<float>(s.cov(0, 1)), static_cast<float>(s.cov(0, 2)),
-                   static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
-    p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
-    const ekf::RemovedIds& gone = s.removed();
-    static_assert(ekf::RemovedIds::kMaxIds == static_cast<int>(proto::kRemovedPerPose), "POSE names them all");
-    p.removed = gone.count;
-    p.count = static_cast<std::uint8_t>(gone.count < proto::kRemovedPerPose ? gone.count : proto::kRemovedPerPose);
-    for (std::size_t k = 0; k < p.count; ++k) p.ids[k].feature_id = gone.ids[k];  // <= kRemovedPerPose
     handing_over_ = last_.submap_due;
-    p.submap_frames =
-        handing_over_ ? static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(s.landmarks()))) : 0;
-    send(p);
+    to_wire(step_.slam(), m.batch_id, handing_over_, pose_);
+    send(pose_);
     if (stats_period_ != 0 && ++since_stats_ >= stats_period_) {
       since_stats_ = 0;
       send(stats());

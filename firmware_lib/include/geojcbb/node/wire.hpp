@@ -1,8 +1,9 @@
 // node: the wire and the library side by side. The definitions protocol/ restates (strategy codes,
 // pairing outcomes, feature ids, node budgets, seeds and observations per frame) held equal at compile
-// time; CONFIG tied field by field to the option table (core/options.h) and converted both ways; an
-// OBS_BATCH, ODOMETRY and RESET as the filter's inputs. Used by the Node (node/node.hpp) on the
-// device, and by the host to check and build what it sends. Compile-time checks and O(fields) or
+// time; CONFIG (generated from the option table, core/options.h) converted both ways; an OBS_BATCH,
+// ODOMETRY and RESET as the filter's inputs, and a step's result as the device's reply (ASSOC_RESULT,
+// POSE). Used by the Node (node/node.hpp) on the device, and by the host to check and build what it
+// sends. Compile-time checks and O(fields) or
 // O(observations) conversions; no state.
 #pragma once
 
@@ -54,11 +55,11 @@ static_assert(static_cast<std::size_t>(kMaxSeeds) == proto::kSeedsPerFrame, "SUB
 static_assert(static_cast<std::size_t>(DefaultBounds::kMaxObservations) == proto::kDefaultMaxObsPerBatch,
               "the wire's default batch size is DefaultBounds' observations per scan");
 
-/// CONFIG's fields and the option table (core/options.h): CONFIG keeps its own fields (protocol/ sees
-/// only the standard library); each but the device's own stats_period_scans is an option of the
-/// same name, and the checks below tie them at compile time: the name exists in the table, the wire
-/// type suits the option's TYPE, and CONFIG's default is the table's. The two conversions below
-/// are the only code between the wire and the settings, generated from CONFIG's field list.
+/// CONFIG's fields and the option table (core/options.h): protocol/messages.hpp generates one field
+/// per option from the table, then the device's own stats_period_scans. The checks below state what
+/// that generation must give, at compile time: the name exists in the table, the wire type suits the
+/// option's TYPE, and CONFIG's default is the table's. The two conversions below are the only code
+/// between the wire and the settings, generated from CONFIG's field list.
 namespace config_wire {
 
 constexpr int kFieldCount = static_cast<int>(std::tuple_size<decltype(proto::Config::fields())>::value);
@@ -183,6 +184,48 @@ template <typename T, class B, std::size_t MaxObs>
     if (st != Status::kOk) return st;
   }
   return Status::kOk;
+}
+
+/// The device's reply to an OBS_BATCH: the step's result as ASSOC_RESULT. Per observation its outcome,
+/// the landmark's id where it has one (paired, new landmark), else UNMATCHED (unmatched, a mover's) or
+/// NEW (dropped, not augmented), and its d2 in float32. O(observations).
+template <typename T, class B, std::size_t MaxObs>
+void to_wire(const StepResult<T, B>& r, std::uint32_t batch_id, proto::AssocResultT<MaxObs>& out) {
+  static_assert(MaxObs >= static_cast<std::size_t>(B::kMaxObservations) && MaxObs <= 255,
+                "ASSOC_RESULT holds every observation of a scan, counted in a byte");
+  out.batch_id = batch_id;
+  out.count = static_cast<std::uint8_t>(r.count);
+  for (int i = 0; i < r.count; ++i) {  // <= kMaxObservations
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Outcome o = r.outcome[k];
+    proto::PairingWire& q = out.pairs[k];
+    q.outcome = static_cast<proto::PairingOutcome>(o);
+    q.feature_id = o == Outcome::kPaired || o == Outcome::kNewLandmark ? r.feature[k]
+                   : o == Outcome::kUnmatched || o == Outcome::kMover  ? proto::kFeatureUnmatched
+                                                                       : proto::kFeatureNew;
+    q.d2 = static_cast<float>(r.d2[k]);
+  }
+}
+
+/// The reply's second frame: the filter after the step as POSE (pose, its covariance's upper
+/// triangle, the landmark count and the ids the scan removed); `submap_frames` announces the local
+/// map's hand-over when `handing_over` (0 otherwise). O(kRemovedPerPose).
+template <typename T, class B>
+void to_wire(const ekf::Slam<T, B>& s, std::uint32_t batch_id, bool handing_over, proto::Pose& p) {
+  static_assert(ekf::RemovedIds::kMaxIds == static_cast<int>(proto::kRemovedPerPose), "POSE names them all");
+  p.batch_id = batch_id;
+  p.x_m = static_cast<float>(s.x(0));
+  p.y_m = static_cast<float>(s.x(1));
+  p.theta_rad = static_cast<float>(s.x(2));
+  p.cov_upper = {static_cast<float>(s.cov(0, 0)), static_cast<float>(s.cov(0, 1)), static_cast<float>(s.cov(0, 2)),
+                 static_cast<float>(s.cov(1, 1)), static_cast<float>(s.cov(1, 2)), static_cast<float>(s.cov(2, 2))};
+  p.landmark_count = static_cast<std::uint16_t>(s.landmarks());
+  const ekf::RemovedIds& gone = s.removed();
+  p.removed = gone.count;
+  p.count = static_cast<std::uint8_t>(gone.count < proto::kRemovedPerPose ? gone.count : proto::kRemovedPerPose);
+  for (std::size_t k = 0; k < p.count; ++k) p.ids[k].feature_id = gone.ids[k];  // <= kRemovedPerPose
+  p.submap_frames =
+      handing_over ? static_cast<std::uint16_t>(proto::submap_frames(static_cast<std::uint32_t>(s.landmarks()))) : 0;
 }
 
 /// ODOMETRY as the filter's input.

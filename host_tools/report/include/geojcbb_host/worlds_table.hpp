@@ -1,5 +1,5 @@
 // host_tools/report: the robust preset against its base on generated worlds (the
-// non-inferiority table). Per world, the robust preset (PCJCBB+RL) is *worse* than its base
+// non-inferiority table of docs/results/worlds.md). Per world, the robust preset (PCJCBB+RL) is *worse* than its base
 // (PCJCBB) when its pose error passes the base's by more than max(0.5 m, 20 %) or its F1 is below
 // the base's by more than 0.005; the base *diverged and the robust preset recovered* when the base's
 // pose error is over 3 m and the robust preset's within max(0.5 m, 20 %) of TRUTH's (when TRUTH ran)

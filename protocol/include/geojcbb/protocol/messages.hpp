@@ -10,7 +10,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <type_traits>
 
+#include "geojcbb/core/options.h"
 #include "geojcbb/protocol/error.hpp"
 #include "geojcbb/protocol/fields.hpp"
 #include "geojcbb/protocol/frame.hpp"
@@ -47,7 +50,7 @@ enum class MsgType : std::uint8_t {
 };
 
 /// Observations per OBS_BATCH (and pairings per ASSOC_RESULT) by default: DefaultBounds' 24
-/// (node/node.hpp static_asserts the agreement).
+/// (node/wire.hpp static_asserts the agreement).
 constexpr std::size_t kDefaultMaxObsPerBatch = 24;
 
 /// The schema hash (defined at the end of this file, from every message's description).
@@ -150,7 +153,7 @@ struct Capabilities : Codec<Capabilities> {
   }
 };
 
-/// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/node.hpp static_asserts it).
+/// Strategy numbers of CONFIG (the same order as geojcbb::Strategy; node/wire.hpp static_asserts it).
 enum class StrategyCode : std::uint8_t {
   kIcnn = 0,
   kJcbb = 1,
@@ -162,182 +165,90 @@ enum class StrategyCode : std::uint8_t {
 };
 constexpr std::uint8_t kStrategyCodeCount = 7;
 
-/// CONFIG, host -> device (acknowledged): the SLAM step's settings. Each field but
-/// stats_period_scans is an option of firmware_lib's option table (core/options.h) by the same name;
-/// node/node.hpp ties them at compile time (name, type, default), and a host refuses to send work to
-/// a device when a setting it cannot carry differs from its default. Levels and real values travel
-/// as float32. Domain checks only; the device also checks its capacities (groups, node budget) and
-/// every option's range (SlamStep::configure).
+/// CONFIG's fields from the option table (core/options.h, a C table of the standard library's types
+/// and literals only): the wire type each TYPE travels as, and an option's range (the table's kind,
+/// lo, hi) as the wire checks it. Levels and real values travel
+/// as float32; an integer range that admits every value of its wire type is no range.
+namespace config_options {
+struct WireTypes {
+  using STRATEGY = StrategyCode;
+  using F64 = float;
+  using REAL = float;
+  using F32 = float;
+  using INT = std::uint8_t;
+  using U32 = std::uint32_t;
+  using BOOL = bool;
+};
+enum class Kind : std::uint8_t { kANY, kGT, kGE, kOPEN, kLOPEN, kROPEN, kCLOSED };
+
+template <class W>
+constexpr Range wire_range(Kind k, double lo, double hi) {
+  if constexpr (std::is_same_v<W, bool>) {
+    return range::one_of(0, 1);
+  } else if constexpr (std::is_same_v<W, float>) {
+    const auto flo = static_cast<float>(lo), fhi = static_cast<float>(hi);
+    switch (k) {
+      case Kind::kANY: return range::finite();
+      case Kind::kGT: return range::above(flo);
+      case Kind::kGE: return range::not_below(flo);
+      case Kind::kOPEN: return range::interval(flo, fhi, true, true);
+      case Kind::kLOPEN: return range::interval(flo, fhi, true, false);
+      case Kind::kROPEN: return range::interval(flo, fhi, false, true);
+      case Kind::kCLOSED: return range::interval(flo, fhi, false, false);
+    }
+    return range::finite();
+  } else {
+    using U = typename detail::Underlying<W>::type;
+    constexpr auto kMax = static_cast<std::int64_t>(std::numeric_limits<U>::max());
+    if (k == Kind::kANY) return range::any();
+    const auto ilo = static_cast<std::int64_t>(lo) + (k == Kind::kGT || k == Kind::kOPEN || k == Kind::kLOPEN);
+    const std::int64_t ihi = k == Kind::kGT || k == Kind::kGE        ? kMax
+                             : k == Kind::kOPEN || k == Kind::kROPEN ? static_cast<std::int64_t>(hi) - 1
+                                                                     : static_cast<std::int64_t>(hi);
+    if (ilo <= 0 && ihi >= kMax) return range::any();
+    return ihi >= kMax ? range::at_least(ilo) : range::between(ilo, ihi);
+  }
+}
+}  // namespace config_options
+
+/// CONFIG, host -> device (acknowledged): the SLAM step's settings, generated from the option table
+/// (core/options.h): one field per line, in the table's order, named as the option, its wire type
+/// from the option's TYPE (config_options::WireTypes), its default the table's, its range the
+/// table's (config_options::wire_range), its unit and note the table's. Then stats_period_scans, the
+/// device's own. node/wire.hpp converts it to and from the library's settings. Domain checks only;
+/// the device also checks its capacities (groups, node budget) and every option's range
+/// (SlamStep::configure).
 struct Config : Codec<Config> {
   static constexpr MsgType kType = MsgType::kConfig;
   static constexpr const char* kName = "CONFIG";
   static constexpr const char* kRule = "max_range_m>min_range_m";
 
-  StrategyCode strategy = StrategyCode::kGeojcbb;
-  float confidence = 0.99f;           ///< chi-square level of the compatibility tests, (0, 1)
-  float new_landmark_level = 0.999f;  ///< level beyond which an observation is a new landmark, (0, 1)
-  float local_radius_m = 10.0f;       ///< local region radius r + d, > 0
-  std::uint8_t groups = 3;            ///< K for k-means / GMM-EM (0: chosen by BIC)
-  bool condition_groups = false;
-  float dbscan_eps_m = 1.5f;                ///< > 0
-  std::uint8_t dbscan_min_points = 2;       ///< >= 1
-  std::uint32_t node_budget = 0;            ///< JCBB nodes per scan (0: the device's capacity)
-  float min_range_m = 0.0f;                 ///< >= 0
-  float max_range_m = 10.0f;                ///< > 0, > min_range_m
-  float half_fov_rad = kPiF;                ///< (0, pi]
-  float sensor_x_m = 0.0f;                  ///< the sensor's mount on the robot: ahead [-100, 100]
-  float sensor_y_m = 0.0f;                  ///< to the left [-100, 100]
-  float sensor_theta_rad = 0.0f;            ///< its heading [-pi, pi]
-  float landmark_confirm_nats = 4.6f;       ///< log-odds of existence that confirms, (0, 1e6)
-  float landmark_delete_nats = -4.0f;       ///< log-odds at or below which a landmark goes, (-1e6, 0)
-  float landmark_reserve_nats = 1000.0f;    ///< log-odds it can hold beyond confirmation, >= 0
-  std::uint8_t max_tentative_reviews = 10;  ///< reviews a landmark may stay tentative, >= 1
-  bool tentative_isolated = false;          ///< tentative landmarks paired apart, updating only themselves
-  bool joint_recheck = true;
-  float ambiguity_margin = 0.0f;  ///< [0, 1e6) (0: off)
-  bool new_if_candidates_taken = false;
-  bool verify = false;
-  bool full_covariance_check = false;
-  bool papers_em = false;
-  float seed_min_position_var_m2 = 4.0f;            ///< > 0
-  float consistency_wide_d2 = 23.025850929940457f;  ///< > 0
-  float consistency_pair_d2 = 10.827566170662733f;  ///< > 0
-  bool rjc = false;
-  std::uint8_t rjc_tries = 8;       ///< 1 .. 64
-  std::uint8_t rjc_subset = 8;      ///< >= 1
-  float occlusion_rad = 0.0f;       ///< [0, pi]
-  float static_gate_level = 0.0f;   ///< [0, 1)
-  float motion_false_alarm = 0.0f;  ///< [0, 1) (0: off)
-  float detection_floor = 0.0f;     ///< [0, 1]
-  bool learn_detection = false;
-  bool learn_clutter = false;
-  bool first_estimates_jacobians = true;
-  bool augment = true;
-  bool relocalise = false;                   ///< the pose-free relocaliser
-  std::uint8_t reloc_min_inliers = 5;        ///< >= 3
-  float reloc_margin_nats = 10.0f;           ///< >= 0
-  std::uint8_t reloc_base_pairs = 4;         ///< 1 .. 8
-  float reloc_inflation = 4.0f;              ///< >= 1
-  std::uint8_t reloc_confirm_scans = 1;      ///< 0 .. 16
-  float reloc_lost_nats = 20.0f;             ///< >= 0 (0: off)
-  bool loop_check = false;                   ///< loop closures scored against a pose-free alignment
-  std::uint8_t loop_age = 100;               ///< scans unpaired that make a landmark old, >= 1
-  std::uint8_t loop_min_inliers = 3;         ///< >= 3
-  float loop_margin_nats = 3.0f;             ///< >= 0
-  std::uint8_t loop_confirm_scans = 2;       ///< 1 .. 16
-  float loop_inflation = 4.0f;               ///< >= 1
-  float loop_detection_probability = 0.9f;   ///< (0, 1)
-  float loop_unexplained_density = 0.003f;   ///< > 0
-  float duplicate_merge_d2 = 0.0f;           ///< >= 0 (0: off)
-  std::uint8_t hypothesis_rivals = 0;        ///< pose hypotheses beside the best, 0 (off) .. 2
-  std::uint8_t hypothesis_window_scans = 5;  ///< 1 .. 32
-  float hypothesis_margin_nats = 3.0f;       ///< > 0
-  bool hypothesis_hold = false;              ///< disputed observations held while a window is open
-  bool cluster_first = false;                ///< each cluster of observations paired as a unit first
-  bool evict_when_full = false;              ///< a full map evicts its least-seen landmark beyond r + d
-  std::uint32_t submap_landmarks = 0;        ///< the local map closes at this many landmarks (0: off)
-  float submap_distance_m = 0.0f;            ///< ... after this distance (0: off)
-  std::uint32_t submap_scans = 0;            ///< ... after this many scans (0: off)
-  bool submap_carry = true;                  ///< the next map begins with the region's confirmed landmarks
+#define GEOJCBB_CONFIG_MEMBER(TYPE, name, def, range, unit, cli, doc) \
+  config_options::WireTypes::TYPE name = static_cast<config_options::WireTypes::TYPE>(def);
+  GEOJCBB_OPTIONS(GEOJCBB_CONFIG_MEMBER)
+#undef GEOJCBB_CONFIG_MEMBER
+
   /// The device sends STATS unasked after the POSE of every this-many scans since CONFIG or RESET
   /// (0: only on request).
   std::uint16_t stats_period_scans = 0;
 
+  /// One field per line of the option table, in its order, then the device's own stats_period_scans.
+  /// (One make_tuple: clang's constant evaluator gives up on a tuple_cat of 67 tuples.)
+  // clang-format off
   static constexpr auto fields() {
+#define GEOJCBB_CONFIG_RANGE(kind, lo, hi) config_options::Kind::k##kind, static_cast<double>(lo), static_cast<double>(hi)
+#define GEOJCBB_CONFIG_FIELD(TYPE, name, def, range, unit, cli, doc) \
+  field(#name, &Config::name, config_options::wire_range<config_options::WireTypes::TYPE>(GEOJCBB_CONFIG_RANGE range), \
+        unit, doc),
     return std::make_tuple(
-        field("strategy", &Config::strategy, range::between(0, kStrategyCodeCount - 1), "",
-              "0 ICNN, 1 JCBB, 2 KJCBB, 3 DFJCBB, 4 GEMJCBB, 5 GEOJCBB, 6 PCJCBB"),
-        field("confidence", &Config::confidence, range::interval(0.0f, 1.0f, true, true), "",
-              "chi-square level of the compatibility tests"),
-        field("new_landmark_level", &Config::new_landmark_level, range::interval(0.0f, 1.0f, true, true), "",
-              "chi-square level beyond which an observation is a new landmark"),
-        field("local_radius_m", &Config::local_radius_m, range::above(0.0f), "m", "r + d"),
-        field("groups", &Config::groups, range::any(), "", "0: chosen by BIC; the device checks ≤ its `max_groups`"),
-        field("condition_groups", &Config::condition_groups, range::one_of(0, 1)),
-        field("dbscan_eps_m", &Config::dbscan_eps_m, range::above(0.0f), "m"),
-        field("dbscan_min_points", &Config::dbscan_min_points, range::at_least(1)),
-        field("node_budget", &Config::node_budget, range::any(), "nodes",
-              "JCBB nodes per scan, 0: the device's `max_jcbb_nodes`; the device checks ≤ it"),
-        field("min_range_m", &Config::min_range_m, range::not_below(0.0f), "m"),
-        field("max_range_m", &Config::max_range_m, range::above(0.0f), "m", "> `min_range_m`"),
-        field("half_fov_rad", &Config::half_fov_rad, range::interval(0.0f, kPiF, true, false), "rad"),
-        field("sensor_x_m", &Config::sensor_x_m, range::interval(-100.0f, 100.0f, false, false), "m",
-              "the sensor's mount: ahead of the motion model's point"),
-        field("sensor_y_m", &Config::sensor_y_m, range::interval(-100.0f, 100.0f, false, false), "m", "to the left"),
-        field("sensor_theta_rad", &Config::sensor_theta_rad, range::interval(-kPiF, kPiF, false, false), "rad",
-              "its heading on the robot"),
-        field("landmark_confirm_nats", &Config::landmark_confirm_nats, range::interval(0.0f, 1e6f, true, true), "nats",
-              "log-odds of existence that confirms a landmark"),
-        field("landmark_delete_nats", &Config::landmark_delete_nats, range::interval(-1e6f, 0.0f, true, true), "nats",
-              "log-odds of existence at or below which a landmark is removed"),
-        field("landmark_reserve_nats", &Config::landmark_reserve_nats, range::not_below(0.0f), "nats",
-              "log-odds a landmark can hold beyond `landmark_confirm_nats`"),
-        field("max_tentative_reviews", &Config::max_tentative_reviews, range::at_least(1), "",
-              "reviews a landmark may stay tentative"),
-        field("tentative_isolated", &Config::tentative_isolated, range::one_of(0, 1), "",
-              "tentative landmarks paired apart, updating only themselves"),
-        field("joint_recheck", &Config::joint_recheck, range::one_of(0, 1)),
-        field("ambiguity_margin", &Config::ambiguity_margin, range::interval(0.0f, 1e6f, false, true), "", "0: off"),
-        field("new_if_candidates_taken", &Config::new_if_candidates_taken, range::one_of(0, 1)),
-        field("verify", &Config::verify, range::one_of(0, 1), "", "pairwise verification (PCJCBB: always)"),
-        field("full_covariance_check", &Config::full_covariance_check, range::one_of(0, 1)),
-        field("papers_em", &Config::papers_em, range::one_of(0, 1)),
-        field("seed_min_position_var_m2", &Config::seed_min_position_var_m2, range::above(0.0f), "m^2"),
-        field("consistency_wide_d2", &Config::consistency_wide_d2, range::above(0.0f)),
-        field("consistency_pair_d2", &Config::consistency_pair_d2, range::above(0.0f)),
-        field("rjc", &Config::rjc, range::one_of(0, 1)), field("rjc_tries", &Config::rjc_tries, range::between(1, 64)),
-        field("rjc_subset", &Config::rjc_subset, range::at_least(1), "", "the device checks ≤ its `max_observations`"),
-        field("occlusion_rad", &Config::occlusion_rad, range::interval(0.0f, kPiF, false, false), "rad", "0: off"),
-        field("static_gate_level", &Config::static_gate_level, range::interval(0.0f, 1.0f, false, true), "", "0: off"),
-        field("motion_false_alarm", &Config::motion_false_alarm, range::interval(0.0f, 1.0f, false, true), "",
-              "per pairing; 0: off"),
-        field("detection_floor", &Config::detection_floor, range::interval(0.0f, 1.0f, false, false), "",
-              "0: every miss counts"),
-        field("learn_detection", &Config::learn_detection, range::one_of(0, 1), ""),
-        field("learn_clutter", &Config::learn_clutter, range::one_of(0, 1), ""),
-        field("first_estimates_jacobians", &Config::first_estimates_jacobians, range::one_of(0, 1), "",
-              "applied at the next RESET"),
-        field("augment", &Config::augment, range::one_of(0, 1), "", "0: a fixed map, nothing added"),
-        field("relocalise", &Config::relocalise, range::one_of(0, 1), "", "the relocaliser when lost"),
-        field("reloc_min_inliers", &Config::reloc_min_inliers, range::at_least(3)),
-        field("reloc_margin_nats", &Config::reloc_margin_nats, range::not_below(0.0f), "nats"),
-        field("reloc_base_pairs", &Config::reloc_base_pairs, range::between(1, 8)),
-        field("reloc_inflation", &Config::reloc_inflation, range::not_below(1.0f)),
-        field("reloc_confirm_scans", &Config::reloc_confirm_scans, range::between(0, 16)),
-        field("reloc_lost_nats", &Config::reloc_lost_nats, range::not_below(0.0f), "nats",
-              "the pose doubted past this evidence against it (0: off)"),
-        field("loop_check", &Config::loop_check, range::one_of(0, 1), "", "loop closures checked before commit"),
-        field("loop_age", &Config::loop_age, range::at_least(1), "scans", "unpaired this long: an old landmark"),
-        field("loop_min_inliers", &Config::loop_min_inliers, range::at_least(3)),
-        field("loop_margin_nats", &Config::loop_margin_nats, range::not_below(0.0f), "nats"),
-        field("loop_confirm_scans", &Config::loop_confirm_scans, range::between(1, 16)),
-        field("loop_inflation", &Config::loop_inflation, range::not_below(1.0f)),
-        field("loop_detection_probability", &Config::loop_detection_probability,
-              range::interval(0.0f, 1.0f, true, true)),
-        field("loop_unexplained_density", &Config::loop_unexplained_density, range::above(0.0f), "1/m^2"),
-        field("duplicate_merge_d2", &Config::duplicate_merge_d2, range::not_below(0.0f), "",
-              "landmarks never observed together closer than this d2 are merged (0: off)"),
-        field("hypothesis_rivals", &Config::hypothesis_rivals, range::between(0, 2), "", "0: off"),
-        field("hypothesis_window_scans", &Config::hypothesis_window_scans, range::between(1, 32), "scans"),
-        field("hypothesis_margin_nats", &Config::hypothesis_margin_nats, range::above(0.0f), "nats"),
-        field("hypothesis_hold", &Config::hypothesis_hold, range::one_of(0, 1), "",
-              "disputed observations held while a window is open"),
-        field("cluster_first", &Config::cluster_first, range::one_of(0, 1), "",
-              "each cluster of observations paired as a unit first, its members at that posterior"),
-        field("evict_when_full", &Config::evict_when_full, range::one_of(0, 1), "",
-              "a full map makes room: its least-seen landmark beyond r + d goes"),
-        field("submap_landmarks", &Config::submap_landmarks, range::between(0, 32767), "",
-              "the local map is closed after a scan that leaves it this many landmarks (0: off)"),
-        field("submap_distance_m", &Config::submap_distance_m, range::not_below(0.0f), "m",
-              "the local map is closed once the robot has travelled this far in it (0: off)"),
-        field("submap_scans", &Config::submap_scans, range::between(0, 1000000), "scans",
-              "the local map is closed after this many scans (0: off)"),
-        field("submap_carry", &Config::submap_carry, range::one_of(0, 1), "",
-              "the next local map begins with the closed one's confirmed landmarks of the region"),
+        GEOJCBB_OPTIONS(GEOJCBB_CONFIG_FIELD)
         field("stats_period_scans", &Config::stats_period_scans, range::any(), "scans",
               "0: STATS only on request; N > 0: the device also sends STATS, unasked, after the POSE of every "
               "N-th scan since this CONFIG or the last RESET"));
+#undef GEOJCBB_CONFIG_FIELD
+#undef GEOJCBB_CONFIG_RANGE
   }
+  // clang-format on
   [[nodiscard]] Error rule() const { return max_range_m > min_range_m ? Error::kOk : Error::kOutOfRange; }
 };
 
@@ -526,11 +437,11 @@ struct ObsBatchT : Codec<ObsBatchT<MaxObs>> {
 using ObsBatch = ObsBatchT<>;
 
 /// Feature ids of ASSOC_RESULT besides map ids (>= 0); geojcbb::kNewFeature and kUnmatched
-/// (node/node.hpp static_asserts the agreement).
+/// (node/wire.hpp static_asserts the agreement).
 constexpr std::int32_t kFeatureNew = -1;        ///< the observation starts a new landmark
 constexpr std::int32_t kFeatureUnmatched = -2;  ///< clutter, or ambiguous: not used
 
-/// What became of an observation (firmware_lib node::Outcome, value for value; node/node.hpp
+/// What became of an observation (firmware_lib node::Outcome, value for value; node/wire.hpp
 /// static_asserts it).
 enum class PairingOutcome : std::uint8_t {
   kPaired = 0,    ///< feature_id: the map landmark it was paired with

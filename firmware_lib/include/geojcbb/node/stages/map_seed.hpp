@@ -25,7 +25,7 @@
 
 namespace geojcbb::node {
 
-/// Seeds per call: SUBMAP_SEED's kSeedsPerFrame (node/node.hpp static_asserts the agreement).
+/// Seeds per call: SUBMAP_SEED's kSeedsPerFrame (node/wire.hpp static_asserts the agreement).
 constexpr int kMaxSeeds = 8;
 
 /// One landmark of the global map, in the local map's frame.

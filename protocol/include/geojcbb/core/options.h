@@ -1,9 +1,10 @@
 /* core: every option of one SLAM step (association and filter), described once. C and C++ both read
  * this table (an X-macro, as nanopb's FIELDLIST): the C++ settings struct, its defaults and range
  * checks (core/settings.hpp), the C struct and its defaults (geojcbb.h), the Python keyword
- * arguments, the command-line options of geojcbb_eval and the options table of docs/options.md all
- * come from it. The wire's CONFIG names its own subset (node/node.hpp ties each field to a line here
- * by name, type and default at compile time).
+ * arguments, the command-line options of geojcbb_eval, the options table of docs/options.md and the
+ * wire's CONFIG (protocol/messages.hpp: one field per line, in this order, its wire type from TYPE)
+ * all come from it. It lives beside the protocol, which sees only the standard library and this
+ * table (as the stage table, protocol/stage_counts.h); the firmware library reads it from there.
  *
  * X(TYPE, name, default, RANGE, unit, cli, meaning)
  *   TYPE     STRATEGY (enum Strategy), F64 (double), REAL (the scalar T of the C++ templates; float in
@@ -14,8 +15,8 @@
  *            pi rounded up to float, so that float pi is in the range.
  *   cli      the geojcbb_eval option ("": the host derives the value, see docs/options.md); a BOOL
  *            gets --name and --no-name
- * A new option is one line here and the stage that reads it (plus a CONFIG field if the device
- * takes it: node/node.hpp then refuses to compile until the field is tied to its line). */
+ * A new option is one line here and the stage that reads it; CONFIG carries it (a new field: the
+ * schema hash changes, and a host and a device of different tables refuse each other at HELLO). */
 #ifndef GEOJCBB_CORE_OPTIONS_H
 #define GEOJCBB_CORE_OPTIONS_H
 
