@@ -153,8 +153,8 @@ int run(int argc, char** argv) {
       if (b.joins > 0) {
         const double med = quantile(b.ms, 0.5);
         if (base == 0) base = med;
-        std::printf("| %d-%d | %d | %.2f | %.2f | %.2f | %.1f | %.2f | %.2f | %d / %d | %d / %d | %d | %d | %.0f |\n", lo,
-                    b.upto - 1, b.joins, med, quantile(b.ms, 0.95), quantile(b.ms, 1.0), med / base,
+        std::printf("| %d-%d | %d | %.2f | %.2f | %.2f | %.1f | %.2f | %.2f | %d / %d | %d / %d | %d | %d | %.0f |\n",
+                    lo, b.upto - 1, b.joins, med, quantile(b.ms, 0.95), quantile(b.ms, 1.0), med / base,
                     quantile(b.query_ms, 0.5), quantile(b.query_ms, 0.95), b.windowed, b.joins, b.fused, b.expected,
                     b.declined, b.refused, b.rss_mb);
         std::fflush(stdout);
