@@ -397,23 +397,16 @@ void FactorGraph::settle(int window) {
     const Factor& f = factor_list_[static_cast<std::size_t>(k)];
     // The variables: the prior's, then the factor's others (the fixed first frame is none).
     std::vector<Var> u = prior_vars_;
-    auto has = [&](Var v) {
-      return std::any_of(u.begin(), u.end(), [&](Var w) { return w.frame == v.frame && w.index == v.index; });
-    };
     const std::vector<Var> fv = vars_of(f);
     for (Var v : fv)
-      if (!(v.frame && v.index == 0) && !has(v)) u.push_back(v);
+      if (!(v.frame && v.index == 0) && std::find(u.begin(), u.end(), v) == u.end()) u.push_back(v);
     std::vector<Eigen::Index> at(u.size());
     Eigen::Index n = 0;
     for (std::size_t a = 0; a < u.size(); ++a) {
       at[a] = n;
       n += dim(u[a]);
     }
-    auto at_of = [&](Var v) -> Eigen::Index {
-      for (std::size_t a = 0; a < u.size(); ++a)
-        if (u[a].frame == v.frame && u[a].index == v.index) return at[a];
-      return -1;
-    };
+    auto at_of = [&](Var v) { return at[static_cast<std::size_t>(std::find(u.begin(), u.end(), v) - u.begin())]; };
     // 1/2 delta^T H delta + b^T delta: the prior's (at its own linearisation point) and the factor's.
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
     Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
@@ -486,11 +479,9 @@ void FactorGraph::settle(int window) {
       dims.push_back(dim(keep_vars[a]));
       is_frame.push_back(keep_vars[a].frame);
     }
-    for (Var v : u) {
-      if (std::find_if(keep_vars.begin(), keep_vars.end(),
-                       [&](Var w) { return w.frame == v.frame && w.index == v.index; }) == keep_vars.end())
+    for (Var v : u)
+      if (std::find(keep_vars.begin(), keep_vars.end(), v) == keep_vars.end())
         (v.frame ? frame_gone_ : landmark_gone_)[static_cast<std::size_t>(v.index)] = true;
-    }
     prior_vars_ = std::move(keep_vars);
     prior_x0_ = x0;
     prior_W_ = W;

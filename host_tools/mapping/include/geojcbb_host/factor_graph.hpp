@@ -133,6 +133,7 @@ class FactorGraph {
   struct Var {
     bool frame;
     int index;
+    bool operator==(const Var& o) const { return frame == o.frame && index == o.index; }
   };
   double* block(Var v) const { return v.frame ? frame_block(v.index) : landmark_block(v.index); }
   static int dim(Var v) { return v.frame ? 3 : 2; }
